@@ -1,1 +1,196 @@
-int main() { return 0; }
+// tb: the test bench program. Subcommands: check (validation suite), reproduce (a paper's
+// canonical experiment), report (regenerate an HTML report from its JSON).
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include "app/progress.h"
+#include "lib/core/atomic_file.h"
+#include "reports/html_report.h"
+#include "validate/experiment.h"
+#include "validate/registry.h"
+#include "validate/runner.h"
+
+namespace {
+
+std::atomic<bool> g_interrupted{false};
+void on_sigint(int) { g_interrupted = true; }
+
+struct CheckArgs {
+  std::vector<std::string> names;
+  bool quick = false, full = false, list = false, resume = false, no_progress = false;
+  uint64_t seed = 1;
+  int attempt = 0;
+  std::string out = "reports/out/latest";
+};
+
+int cmd_check(const CheckArgs& a) {
+  const auto selected = tb::Registry::global().select(a.names);
+  if (a.list) {
+    for (const tb::Check* c : selected)
+      fmt::print("{:<52} {:<13} {}\n", c->name, c->kind == tb::CheckKind::kStatistical ? "statistical" : "deterministic",
+                 c->description);
+    return 0;
+  }
+  if (selected.empty()) {
+    fmt::print(stderr, "tb check: no check matches");
+    for (const auto& n : a.names) fmt::print(stderr, " '{}'", n);
+    fmt::print(stderr, " (see tb check --list)\n");
+    return 2;
+  }
+  const bool progress = !a.no_progress && isatty(STDERR_FILENO);
+  tb::ProgressLine line(progress);
+  tb::RunOptions opt;
+  opt.seed = a.seed;
+  opt.full = a.full;
+  opt.attempt = a.attempt;
+  opt.out_dir = a.out;
+  opt.resume = a.resume;
+  opt.interrupted = &g_interrupted;
+  opt.on_progress = [&line](double f) { line.update(f); };
+  opt.on_check = [&](size_t i, size_t n, const tb::Check& c, const nlohmann::json* rec) {
+    if (!rec) {
+      line.start(c.name);
+      return;
+    }
+    line.finish();
+    const auto& r = (*rec)["first"];
+    const std::string verdict = rec->value("verdict", "fail");
+    fmt::print("[{:>3}/{}] {:<6} {:<50} {:>7.2f}s  {}{}\n", i + 1, n,
+               verdict == "pass" ? "PASS" : verdict == "fail" ? "FAIL" : "PASS*", c.name,
+               r.value("seconds", 0.0), r.value("message", ""), rec->value("resumed", false) ? " (resumed)" : "");
+    if (rec->contains("rerun"))
+      fmt::print("           rerun (fresh seed, 4x samples): {}\n", (*rec)["rerun"].value("message", ""));
+    std::fflush(stdout);
+  };
+  std::signal(SIGINT, on_sigint);
+  std::signal(SIGTERM, on_sigint);
+  fmt::print("tb check: {} checks, {} size, seed {}, results in {}\n", selected.size(), a.full ? "full" : "quick",
+             a.seed, a.out);
+  tb::RunSummary s = tb::run_checks(selected, opt);
+
+  const std::string results_path = (std::filesystem::path(a.out) / "results.json").string();
+  tb::write_file_atomic(results_path, s.results.dump(1));
+  tb::write_check_report(s.results, a.out);
+  fmt::print("\n{} passed, {} failed{}{}. Report: {}\n", s.passed, s.failed,
+             s.resumed ? fmt::format(" ({} resumed)", s.resumed) : "",
+             s.interrupted ? " (interrupted: rerun with --resume to continue)" : "",
+             (std::filesystem::path(a.out) / "index.html").string());
+  if (s.failed > 0) {
+    fmt::print("Failures, with the command that reproduces each:\n");
+    for (const auto& rec : s.results["checks"]) {
+      if (rec.value("passed", false)) continue;
+      fmt::print("  {}: {}\n    {}\n", rec.value("name", ""), rec["first"].value("message", ""),
+                 rec["first"].value("reproducer", ""));
+      if (rec.contains("rerun"))
+        fmt::print("    rerun: {}\n    {}\n", rec["rerun"].value("message", ""), rec["rerun"].value("reproducer", ""));
+    }
+  }
+  if (s.interrupted) return 130;
+  return s.failed > 0 ? 1 : 0;
+}
+
+struct ReproduceArgs {
+  std::string name;
+  bool quick = false, full = false, list = false, no_progress = false;
+  uint64_t seed = 1;
+  std::string out;
+};
+
+int cmd_reproduce(const ReproduceArgs& a) {
+  const auto& reg = tb::ExperimentRegistry::global();
+  if (a.list || a.name.empty()) {
+    for (const auto& e : reg.experiments()) fmt::print("{:<24} {}\n", e.name, e.description);
+    return a.list ? 0 : 2;
+  }
+  const tb::Experiment* e = reg.find(a.name);
+  if (!e) {
+    fmt::print(stderr, "tb reproduce: no experiment named '{}' (see tb reproduce --list)\n", a.name);
+    return 2;
+  }
+  const std::string out = a.out.empty() ? "reports/out/" + a.name : a.out;
+  tb::ProgressLine line(!a.no_progress && isatty(STDERR_FILENO));
+  line.start(a.name);
+  tb::ExperimentContext ctx;
+  ctx.seed = a.seed;
+  ctx.full = a.full;
+  ctx.progress = [&line](double f) { line.update(f); };
+  const auto t0 = std::chrono::steady_clock::now();
+  tb::ExperimentReport rep = e->run(ctx);
+  line.finish();
+  nlohmann::json j = rep;
+  j["config"] = {{"experiment", a.name}, {"seed", a.seed}, {"full", a.full},
+                 {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()},
+                 {"reproducer", fmt::format("tb reproduce {} --seed {} {}", a.name, a.seed, a.full ? "--full" : "--quick")}};
+  tb::write_file_atomic((std::filesystem::path(out) / "report.json").string(), j.dump(1));
+  tb::write_experiment_report(a.name, j, out);
+  for (const auto& c : rep.claims) fmt::print("  {}\n", c);
+  fmt::print("{}: {}. Report: {}\n", a.name, rep.passed ? "claims held" : "A CLAIM FAILED",
+             (std::filesystem::path(out) / "index.html").string());
+  return rep.passed ? 0 : 1;
+}
+
+int cmd_report(const std::string& json_path, const std::string& out) {
+  const nlohmann::json j = nlohmann::json::parse(tb::read_file(json_path));
+  const std::string dir = out.empty() ? std::filesystem::path(json_path).parent_path().string() : out;
+  if (j.contains("checks"))
+    tb::write_check_report(j, dir);
+  else
+    tb::write_experiment_report(j["config"].value("experiment", "experiment"), j, dir);
+  fmt::print("Report: {}\n", (std::filesystem::path(dir) / "index.html").string());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"tb: a test bench for Monte Carlo and MCMC light transport estimators"};
+  app.require_subcommand(1);
+
+  CheckArgs ca;
+  auto* check = app.add_subcommand("check", "Run validation checks; exits non-zero when a check fails");
+  check->add_option("names", ca.names, "Checks to run: full names, group prefixes (core.warp) or globs (*chi2)");
+  auto* q = check->add_flag("--quick", ca.quick, "Quick sample sizes (default)");
+  check->add_flag("--full", ca.full, "Full sample sizes of VALIDATION.md")->excludes(q);
+  check->add_option("--seed", ca.seed, "Run seed; each check derives its own scrambled seed from it");
+  check->add_option("--out", ca.out, "Output folder for results.json, records/ and index.html")->capture_default_str();
+  check->add_option("--attempt", ca.attempt, "Run the k-th rerun directly (fresh seed, 4x samples); for reproducers")
+      ->check(CLI::Range(0, 1));
+  check->add_flag("--list", ca.list, "List the checks (matching NAMES) and exit");
+  check->add_flag("--resume", ca.resume, "Reuse finished checks of an interrupted run with the same seed and size");
+  check->add_flag("--no-progress", ca.no_progress, "No progress line on stderr");
+
+  ReproduceArgs ra;
+  auto* repro = app.add_subcommand("reproduce", "Run a paper's canonical experiment and write its report");
+  repro->add_option("name", ra.name, "Experiment name (see --list)");
+  auto* rq = repro->add_flag("--quick", ra.quick, "Quick size (default)");
+  repro->add_flag("--full", ra.full, "Paper-scale replicate counts")->excludes(rq);
+  repro->add_option("--seed", ra.seed, "Run seed");
+  repro->add_option("--out", ra.out, "Output folder (default reports/out/NAME)");
+  repro->add_flag("--list", ra.list, "List the experiments and exit");
+  repro->add_flag("--no-progress", ra.no_progress, "No progress line on stderr");
+
+  std::string report_json, report_out;
+  auto* report = app.add_subcommand("report", "Regenerate an HTML report from results.json or report.json");
+  report->add_option("json", report_json, "results.json (tb check) or report.json (tb reproduce)")->required()
+      ->check(CLI::ExistingFile);
+  report->add_option("--out", report_out, "Output folder (default: the JSON file's folder)");
+
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (*check) return cmd_check(ca);
+    if (*repro) return cmd_reproduce(ra);
+    if (*report) return cmd_report(report_json, report_out);
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "tb: error: {}\n", e.what());
+    return 2;
+  }
+  return 0;
+}

@@ -1,0 +1,52 @@
+// Runs registered checks the way VALIDATION.md prescribes: a scrambled seed per check
+// (hash of the run seed and the check's name), a rerun with a fresh seed and 4x the samples
+// when a statistical check rejects (fail only if the rerun rejects too, report both), one
+// record per check written atomically as soon as it finishes (so an interrupted run loses
+// nothing and `--resume` picks up where it stopped), and a reproducer for every failure.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "validate/registry.h"
+
+namespace tb {
+
+struct RunOptions {
+  uint64_t seed = 1;
+  bool full = false;
+  int attempt = 0;           // 0: normal run; k >= 1: run directly the k-th rerun (fresh seed, 4x samples)
+  std::string out_dir;       // where records/ and results.json go ("" = write nothing)
+  bool resume = false;       // reuse records in out_dir/records that match seed and size
+  // Called before and after each check (index, total, check, record or null when starting).
+  std::function<void(size_t, size_t, const Check&, const nlohmann::json*)> on_check = {};
+  // Progress of the running check in [0, 1]; may be called from any thread.
+  std::function<void(double)> on_progress = [](double) {};
+  const std::atomic<bool>* interrupted = nullptr;  // stop between checks when set
+};
+
+// The seed a check's context receives for a given run seed and attempt.
+uint64_t check_seed(uint64_t run_seed, const std::string& name, int attempt);
+// The command that reproduces one check's result.
+std::string reproducer_command(const std::string& name, uint64_t run_seed, bool full, int attempt);
+
+// Runs one check (with its rerun policy) and returns its record:
+// {"name", "passed", "verdict": "pass" | "pass-on-rerun" | "fail", "first": CheckResult,
+//  "rerun": CheckResult (if any), "kind", "description", "full", "run_seed"}.
+nlohmann::json run_one(const Check& check, const RunOptions& opt);
+
+struct RunSummary {
+  nlohmann::json results;  // {"config": {...}, "checks": [records...], "passed": n, "failed": n}
+  size_t passed = 0, failed = 0, resumed = 0;
+  bool interrupted = false;
+};
+
+RunSummary run_checks(const std::vector<const Check*>& checks, const RunOptions& opt);
+
+}  // namespace tb
