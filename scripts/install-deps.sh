@@ -5,7 +5,7 @@ set -euo pipefail
 pkgs=(cmake g++ make pkg-config
       libglm-dev libtbb-dev libboost-dev libeigen3-dev libceres-dev
       nlohmann-json3-dev libfmt-dev libcli11-dev libembree-dev libopenexr-dev libtinyobjloader-dev
-      libgtest-dev libgmock-dev libbenchmark-dev gnuplot-nox)
+      libpng-dev libgtest-dev libgmock-dev libbenchmark-dev gnuplot-nox)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
