@@ -11,6 +11,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include "app/cmd_render.h"
 #include "app/progress.h"
 #include "lib/core/atomic_file.h"
 #include "reports/html_report.h"
@@ -177,6 +178,19 @@ int main(int argc, char** argv) {
   repro->add_flag("--list", ra.list, "List the experiments and exit");
   repro->add_flag("--no-progress", ra.no_progress, "No progress line on stderr");
 
+  tb::RenderArgs rargs;
+  auto* render = app.add_subcommand("render", "Render a scene file to OpenEXR (+ PNG preview, JSON record)");
+  render->add_option("scene", rargs.scene, "Scene file (JSON, docs/scene.md)");
+  render->add_option("--integrator", rargs.integrator, "Integrator name (see --list)")->capture_default_str();
+  render->add_option("--spp", rargs.spp, "Samples per pixel (default: the scene's, else 16)");
+  render->add_option("--passes", rargs.passes, "Welch samples per pixel (spp is split over them)")->capture_default_str();
+  render->add_option("--time", rargs.time_s, "Time budget in seconds: render passes until it runs out");
+  render->add_option("--seed", rargs.seed, "Seed");
+  render->add_option("--threads", rargs.threads, "Worker threads (0: all cores)");
+  render->add_option("-o,--out", rargs.out, "Output EXR path")->capture_default_str();
+  render->add_flag("--list", rargs.list, "List the integrators and exit");
+  render->add_flag("--no-progress", rargs.no_progress, "No progress line on stderr");
+
   std::string report_json, report_out;
   auto* report = app.add_subcommand("report", "Regenerate an HTML report from results.json or report.json");
   report->add_option("json", report_json, "results.json (tb check) or report.json (tb reproduce)")->required()
@@ -187,6 +201,14 @@ int main(int argc, char** argv) {
   try {
     if (*check) return cmd_check(ca);
     if (*repro) return cmd_reproduce(ra);
+    if (*render) {
+      if (!rargs.list && rargs.scene.empty()) {
+        fmt::print(stderr, "tb render: a scene file is required\n");
+        return 2;
+      }
+      std::signal(SIGINT, on_sigint);
+      return tb::cmd_render(rargs, &g_interrupted);
+    }
     if (*report) return cmd_report(report_json, report_out);
   } catch (const std::exception& e) {
     fmt::print(stderr, "tb: error: {}\n", e.what());

@@ -167,6 +167,12 @@ void StrictObject::fail(const std::string& key, const std::string& what) const {
 
 bool StrictObject::has(const std::string& key) const { return obj_->contains(key); }
 
+std::vector<std::string> StrictObject::keys() const {
+  std::vector<std::string> k;
+  for (const auto& [key, v] : obj_->items()) k.push_back(key);
+  return k;
+}
+
 const nlohmann::json& StrictObject::value(const std::string& key) const {
   auto it = obj_->find(key);
   if (it == obj_->end()) fail(key, "missing required key '" + key + "'");

@@ -44,6 +44,8 @@ class StrictObject {
   static StrictObject root(std::shared_ptr<const JsonDocument> doc) { return StrictObject(std::move(doc), ""); }
 
   bool has(const std::string& key) const;
+  // The keys present, in document order of nlohmann's map (sorted).
+  std::vector<std::string> keys() const;
   const std::string& pointer() const { return pointer_; }
   [[noreturn]] void fail(const std::string& key, const std::string& what) const;
 

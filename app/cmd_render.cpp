@@ -1,0 +1,80 @@
+#include "app/cmd_render.h"
+
+#include <chrono>
+#include <filesystem>
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include "app/progress.h"
+#include "lib/core/atomic_file.h"
+#include "lib/core/parallel.h"
+#include "lib/film/exr_io.h"
+#include "lib/film/png_preview.h"
+#include "lib/integrator/integrator_registry.h"
+#include "lib/scene/scene_loader.h"
+
+namespace tb {
+
+int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
+  if (a.list) {
+    for (const auto& i : integrators()) fmt::print("{:<12} {}\n", i.name, i.description);
+    return 0;
+  }
+  const IntegratorInfo* integ = find_integrator(a.integrator);
+  if (!integ) {
+    std::string names;
+    for (const auto& i : integrators()) names += (names.empty() ? "" : ", ") + i.name;
+    fmt::print(stderr, "tb render: unknown integrator '{}' (known: {})\n", a.integrator, names);
+    return 2;
+  }
+  const auto t_load = std::chrono::steady_clock::now();
+  std::unique_ptr<World> world = load_world(a.scene);
+  const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count();
+
+  RenderSettings st;
+  st.seed = a.seed;
+  st.spp = a.spp > 0 ? a.spp : world->integrator_defaults().value("spp", int64_t{16});
+  st.max_depth = world->integrator_defaults().value("max_depth", 10);
+  st.passes = std::min(a.passes, st.spp);
+  st.time_budget_s = a.time_s;
+  st.interrupted = interrupted;
+  if (a.time_s > 0) st.passes = std::max<int64_t>(st.passes, 1 << 20);  // passes until the budget runs out
+  ProgressLine line(!a.no_progress && isatty(STDERR_FILENO));
+  line.start(fmt::format("{} {}", a.integrator, std::filesystem::path(a.scene).filename().string()));
+  st.progress = [&](double f) { line.update(f); };
+
+  ThreadLimit limit(static_cast<size_t>(std::max(0, a.threads)));
+  Film film(world->camera().width(), world->camera().height());
+  const auto t0 = std::chrono::steady_clock::now();
+  const int64_t passes = integ->render(*world, st, film);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  line.finish();
+
+  const ExrImage img = exr_image_from_welch(film.welch());
+  write_exr(a.out, img);
+  const std::string png = std::filesystem::path(a.out).replace_extension(".png").string();
+  write_png_preview(png, film.width(), film.height(), film.mean_image(), 0.0);
+  const int64_t spp_done = passes * std::max<int64_t>(1, st.spp / std::max<int64_t>(1, st.passes));
+  nlohmann::json rec = {{"scene", a.scene},
+                        {"integrator", a.integrator},
+                        {"seed", a.seed},
+                        {"passes", passes},
+                        {"spp", spp_done},
+                        {"seconds", seconds},
+                        {"load_seconds", load_s},
+                        {"nonfinite_samples", film.nonfinite().count()},
+                        {"interrupted", interrupted && interrupted->load()},
+                        {"scene_description", world->description()}};
+  write_file_atomic(std::filesystem::path(a.out).replace_extension(".json").string(), rec.dump(1));
+  fmt::print("{}: {}x{}, {} passes, {} spp in {:.2f} s ({:.3g} samples/s); {} non-finite samples rejected\n", a.out,
+             film.width(), film.height(), passes, spp_done, seconds,
+             static_cast<double>(spp_done) * static_cast<double>(film.pixel_count()) / seconds,
+             film.nonfinite().count());
+  if (film.nonfinite().count() > 0)
+    fmt::print("{} (replay: tb render {} --integrator {} --seed {})\n", film.nonfinite().summary(), a.scene,
+               a.integrator, a.seed);
+  return 0;
+}
+
+}  // namespace tb

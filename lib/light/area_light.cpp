@@ -1,0 +1,77 @@
+#include "lib/light/area_light.h"
+
+namespace tb {
+
+AreaLight::AreaLight(const Scene& scene, uint32_t shape_id, const Rgb& radiance, bool two_sided)
+    : scene_(&scene), shape_id_(shape_id), radiance_(radiance), two_sided_(two_sided) {
+  // A = E[1 / pdf_A(x)] for x drawn from the area sampler (exact when pdf_A is constant).
+  constexpr int kN = 64;
+  CompensatedSum sum;
+  for (int i = 0; i < kN; ++i)
+    for (int j = 0; j < kN; ++j) {
+      const AreaSample s = scene.sample_area(shape_id, Vec2((i + 0.5) / kN, (j + 0.5) / kN));
+      if (s.pdf_area > 0) sum += 1.0 / s.pdf_area;
+    }
+  area_ = sum.value() / (kN * kN);
+}
+
+Rgb AreaLight::le(const Vec3& n, const Vec3& w) const {
+  if (two_sided_ || glm::dot(n, w) > 0) return radiance_;
+  return Rgb(0.0);
+}
+
+double AreaLight::pdf_area(const Hit& h) const { return scene_->pdf_area(h); }
+
+std::optional<LightLiSample> AreaLight::sample_li(const Vec3& ref, const Vec2& u) const {
+  const AreaSample s = scene_->sample_area(shape_id_, u);
+  if (!(s.pdf_area > 0)) return std::nullopt;
+  const Vec3 d = s.hit.p - ref;
+  const double dist2 = glm::dot(d, d);
+  if (!(dist2 > 0)) return std::nullopt;
+  const double dist = std::sqrt(dist2);
+  const Vec3 wi = d / dist;
+  const double cos_light = std::abs(glm::dot(s.hit.n, wi));
+  if (!(cos_light > 0)) return std::nullopt;
+  LightLiSample ls;
+  ls.wi = wi;
+  ls.li = le(s.hit.n, -wi);
+  ls.pdf = s.pdf_area * dist2 / cos_light;  // area -> solid angle at ref
+  ls.p_light = s.hit.p;
+  ls.n_light = s.hit.n;
+  ls.distance = dist;
+  ls.pdf_area = s.pdf_area;
+  return ls;
+}
+
+double AreaLight::pdf_li(const Vec3& ref, const Vec3& wi, const Hit* on_light) const {
+  if (!on_light || on_light->shape_id != shape_id_) return 0.0;
+  const Vec3 d = on_light->p - ref;
+  const double dist2 = glm::dot(d, d);
+  const double cos_light = std::abs(glm::dot(on_light->n, wi));
+  if (!(cos_light > 0) || !(dist2 > 0)) return 0.0;
+  return pdf_area(*on_light) * dist2 / cos_light;
+}
+
+std::optional<LightLeSample> AreaLight::sample_le(const Vec2& u_pos, const Vec2& u_dir) const {
+  const AreaSample s = scene_->sample_area(shape_id_, u_pos);
+  if (!(s.pdf_area > 0)) return std::nullopt;
+  const Vec3 w = sample_emission_direction(s.hit.n, two_sided_, u_dir);
+  const double pdf_dir = pdf_emission_direction(s.hit.n, two_sided_, w);
+  if (!(pdf_dir > 0)) return std::nullopt;
+  LightLeSample e;
+  e.ray = Ray{s.hit.p, w};
+  e.n = s.hit.n;
+  e.le = le(s.hit.n, w);
+  e.pdf_pos = s.pdf_area;
+  e.pdf_dir = pdf_dir;
+  return e;
+}
+
+void AreaLight::pdf_le(const Hit& at, const Vec3& w, double* pdf_pos, double* pdf_dir) const {
+  *pdf_pos = pdf_area(at);
+  *pdf_dir = pdf_emission_direction(at.n, two_sided_, w);
+}
+
+Rgb AreaLight::power() const { return radiance_ * (kPi * area_ * (two_sided_ ? 2.0 : 1.0)); }
+
+}  // namespace tb

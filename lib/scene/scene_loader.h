@@ -1,0 +1,24 @@
+// The JSON scene format (docs/scene.md). Strict: an unknown key, a wrong type, a missing field,
+// a non-finite number or degenerate geometry is a JsonError naming the file, the line and the
+// JSON pointer of the offending value; a missing mesh file names its path.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "lib/core/strict_json.h"
+#include "lib/geometry/transform.h"
+#include "lib/scene/world.h"
+
+namespace tb {
+
+std::unique_ptr<World> load_world(const std::string& path);
+// From text; relative mesh paths resolve against base_dir.
+std::unique_ptr<World> load_world_from_string(const std::string& text, const std::string& name = "<string>",
+                                              const std::string& base_dir = ".");
+
+// {"matrix": [[...4], [...4], [...4]]} or any of {"translate": [x,y,z], "rotate": [[ax,ay,az,deg], ...],
+// "scale": s | [sx,sy,sz]}, composed as translate * rotate_n * ... * rotate_1 * scale.
+AffineTransform parse_transform(const StrictObject& o);
+
+}  // namespace tb
