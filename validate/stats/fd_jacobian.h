@@ -3,7 +3,7 @@
 //
 // At each configuration x it computes:
 //  * central differences with h_i = eps^(1/3) * max(1, |x_i|) (truncation O(h^2) balances rounding
-//    O(eps/h) at this h; Press et al., Numerical Recipes 3rd ed., Sec. 5.7, Eq. 5.7.8), and again
+//    O(eps/h) at this h; Press et al., Numerical Recipes 3rd ed., Sec. 5.7), and again
 //    with h_i/2; if the two disagree by more than `discontinuity_tolerance` the configuration
 //    straddles a discontinuity or kink and is skipped and counted, never failed or passed;
 //  * relative error  err = max_ij |J_fd - J|_ij / max(1, max_ij |J_ij|)  (a max-norm over the whole
@@ -68,6 +68,7 @@ struct FdResult {
   double median_condition_number = 0.0;
   int64_t first_failure_index = -1;
   std::string message;              // one line summary
+  std::vector<FdPointResult> points;  // per configuration, in index order
 };
 
 // Checks J against f at one configuration. `index` seeds the Taylor direction.

@@ -32,6 +32,8 @@ double normal_quantile(double p);
 double normal_two_sided_p(double z);
 // Student t quantile with dof degrees of freedom.
 double students_t_quantile(double p, double dof);
+// Two-sided tail probability P(|T| >= |t|) of Student's t with dof degrees of freedom.
+double students_t_two_sided_p(double t, double dof);
 
 // ---- Tests on means --------------------------------------------------------------------------
 // Two-sided z test of H0: E[mean] = mu0 given the standard error of mean.

@@ -1,0 +1,63 @@
+// MMIS_n estimates per second at the budget N = 64 with T = 4 marginal techniques (West et al. 2022,
+// Fig. 1 bottom), n = 1..16, against the bare cost of the n·N·T conditional pdf evaluations it makes.
+//   BM_MmisBudget/n      one estimate: N / (nT) realisations of Eq. 6, sampling included
+//   BM_BarePdfEvals/n    the same n·N·T evaluations of p(x | t) over pre-sampled (x, t), nothing else
+// Cost linear in n shows as a log-log slope of 1 of time against n (docs/estimators.md).
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "analytic/fig1_setups.h"
+#include "estimators/mmis_budget.h"
+#include "lib/core/rng.h"
+
+namespace tb {
+namespace {
+
+constexpr int kBudget = 64;
+
+void BM_MmisBudget(benchmark::State& state) {
+  const Fig1Bottom b = make_fig1_bottom();
+  const int n = static_cast<int>(state.range(0));
+  Rng rng(42);
+  RngUniforms u(rng);
+  int64_t evals = 0;
+  for (auto _ : state) {
+    const Estimate e = estimate_mmis_budget(*b.f, std::span<const ConditionalNormal1D>(b.techniques), n, kBudget, u);
+    evals += e.pdf_evals;
+    benchmark::DoNotOptimize(e.value);
+  }
+  state.counters["estimates/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["pdf_evals/estimate"] = static_cast<double>(evals) / static_cast<double>(state.iterations());
+}
+BENCHMARK(BM_MmisBudget)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Arg(16);
+
+void BM_BarePdfEvals(benchmark::State& state) {
+  const Fig1Bottom b = make_fig1_bottom();
+  const int n = static_cast<int>(state.range(0));
+  const int t = static_cast<int>(b.techniques.size());
+  const int realisations = kBudget / (n * t);
+  Rng rng(42);
+  RngUniforms u(rng);
+  // One realisation's pairs, reused: only the evaluations are timed.
+  std::vector<std::pair<size_t, ConditionalNormal1D::Aux>> aux;
+  std::vector<double> xs;
+  for (size_t i = 0; i < b.techniques.size(); ++i)
+    for (int j = 0; j < n; ++j) {
+      const auto a = b.techniques[i].sample_aux(u);
+      aux.push_back({i, *a});
+      xs.push_back(*b.techniques[i].sample(*a, u));
+    }
+  for (auto _ : state) {
+    double s = 0.0;
+    for (int r = 0; r < realisations; ++r)
+      for (double x : xs)
+        for (const auto& [i, a] : aux) s += b.techniques[i].pdf(x, a);
+    benchmark::DoNotOptimize(s);
+  }
+  state.counters["estimates/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_BarePdfEvals)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Arg(16);
+
+}  // namespace
+}  // namespace tb

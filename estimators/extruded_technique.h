@@ -1,0 +1,26 @@
+// A classical technique seen as a marginal one (West et al. 2022, Sec. 3.1, "Combining classical and
+// marginal techniques"): extrude it over a technique space of identical conditional techniques,
+// p(x | t) = p(x) for every t. The auxiliary variable carries no information (std::monostate) and
+// consumes no uniforms.
+#pragma once
+
+#include <optional>
+#include <variant>
+
+#include "estimators/concepts.h"
+
+namespace tb {
+
+template <Technique C>
+struct ExtrudedTechnique {
+  using Aux = std::monostate;
+  using Sample = typename C::Sample;
+  C technique;
+
+  std::optional<Aux> sample_aux(Uniforms&) const { return Aux{}; }
+  std::optional<Sample> sample(const Aux&, Uniforms& u) const { return technique.sample(u); }
+  // Same measure as C::pdf.
+  double pdf(const Sample& x, const Aux&) const { return technique.pdf(x); }
+};
+
+}  // namespace tb

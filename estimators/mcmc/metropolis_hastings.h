@@ -1,0 +1,70 @@
+// The Metropolis-Hastings kernel over a mixture of proposals with state-dependent selection
+// (Otsu et al., Sec. 3.2). It exposes, as functions of (x, y), the proposal density
+// c_k(x) T_k(x -> y) and the acceptance a_k(x -> y), so that checkers evaluate
+// pi(x) c_k(x) T_k(x -> y) a_k(x -> y) without sampling; and it is a MoveKernel (concepts.h), so
+// the generic step() of kernel_step.h runs it.
+//
+// Detailed balance holds per component: pi(x) c_k(x) T_k(x->y) a_k(x->y) is symmetric in (x, y)
+// for every k, hence the whole kernel sum_k c_k T_k a_k is reversible with respect to pi.
+#pragma once
+
+#include <optional>
+#include <utility>
+
+#include "estimators/mcmc/acceptance.h"
+#include "estimators/mcmc/concepts.h"
+#include "estimators/mcmc/proposal_mixture.h"
+
+namespace tb::mcmc {
+
+template <Target Tg, ProposalMixture M, class Rule = HastingsRatio>
+  requires std::same_as<typename Tg::State, typename M::State>
+class MetropolisHastings {
+ public:
+  using State = typename M::State;
+  struct Move {
+    int component = 0;
+    State y{};
+  };
+
+  MetropolisHastings(Tg target, M mixture, Rule rule = {})
+      : target_(std::move(target)), mix_(std::move(mixture)), rule_(std::move(rule)) {}
+
+  const Tg& target() const { return target_; }
+  const M& mixture() const { return mix_; }
+  M& mixture() { return mix_; }
+  int components() const { return mix_.components(); }
+
+  // c_k(x) T_k(x -> y): the density of proposing y from x with component k (measure of the state
+  // space; for a reversible-jump component, the convention of reversible_jump.h).
+  double proposal_density(int k, const State& x, const State& y) const {
+    const double c = mix_.selection(k, x);
+    return c > 0.0 ? c * mix_.density(k, x, y) : 0.0;
+  }
+  // a_k(x -> y) by the kernel's rule (HastingsRatio: Otsu et al., Sec. 3.2).
+  double acceptance(int k, const State& x, const State& y) const {
+    return rule_(target_.density(x), proposal_density(k, x, y), target_.density(y), proposal_density(k, y, x));
+  }
+
+  // ---- MoveKernel ------------------------------------------------------------------------------
+  double target_density(const State& x) const { return target_.density(x); }
+  // One uniform picks the component, the proposal takes what it needs.
+  std::optional<Move> sample_move(const State& x, Uniforms& u) const {
+    const int k = select_component(mix_, x, u.next());
+    if (k < 0) return std::nullopt;
+    std::optional<State> y = mix_.propose(k, x, u);
+    if (!y) return std::nullopt;
+    return Move{k, std::move(*y)};
+  }
+  const State& destination(const Move& m) const { return m.y; }
+  Move reverse(const State& x, const Move& m) const { return Move{m.component, x}; }
+  double move_density(const State& x, const Move& m) const { return proposal_density(m.component, x, m.y); }
+  double acceptance(const State& x, const Move& m) const { return acceptance(m.component, x, m.y); }
+
+ private:
+  Tg target_;
+  M mix_;
+  Rule rule_;
+};
+
+}  // namespace tb::mcmc

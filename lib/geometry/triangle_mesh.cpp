@@ -1,0 +1,127 @@
+#include "lib/geometry/triangle_mesh.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "lib/geometry/spawn.h"
+
+namespace tb {
+
+TriangleMesh::TriangleMesh(std::vector<Vec3> positions, std::vector<glm::uvec3> triangles, std::vector<Vec3> normals,
+                           std::vector<Vec2> texcoords, bool flip_normal)
+    : pos_(std::move(positions)), tris_(std::move(triangles)), nrm_(std::move(normals)), uv_(std::move(texcoords)),
+      flip_(flip_normal) {
+  if (!nrm_.empty() && nrm_.size() != pos_.size()) throw std::invalid_argument("TriangleMesh: one normal per vertex");
+  if (!uv_.empty() && uv_.size() != pos_.size()) throw std::invalid_argument("TriangleMesh: one texcoord per vertex");
+  for (Vec3& p : pos_) p = Vec3(glm::vec3(p));  // exactly Embree's float vertices
+  for (const glm::uvec3& t : tris_)
+    for (int k = 0; k < 3; ++k)
+      if (t[k] >= pos_.size()) throw std::invalid_argument("TriangleMesh: vertex index out of range");
+  cdf_.reserve(tris_.size());
+  CompensatedSum sum;
+  for (uint32_t i = 0; i < tris_.size(); ++i) {
+    sum += triangle_area(i);
+    cdf_.push_back(sum.value());
+  }
+  total_area_ = sum.value();
+  if (!(total_area_ > 0)) throw std::invalid_argument("TriangleMesh: zero area");
+}
+
+double TriangleMesh::triangle_area(uint32_t prim) const {
+  const glm::uvec3 t = tris_[prim];
+  return 0.5 * glm::length(glm::cross(pos_[t[1]] - pos_[t[0]], pos_[t[2]] - pos_[t[0]]));
+}
+
+Hit TriangleMesh::surface_at(uint32_t prim, const Vec2& uv) const {
+  const glm::uvec3 t = tris_[prim];
+  const Vec3 &p0 = pos_[t[0]], &p1 = pos_[t[1]], &p2 = pos_[t[2]];
+  const double b1 = uv.x, b2 = uv.y, b0 = 1 - b1 - b2;
+  Hit h;
+  h.prim_id = prim;
+  h.uv = uv;
+  h.p = b0 * p0 + b1 * p1 + b2 * p2;
+  h.dpdu = p1 - p0;
+  h.dpdv = p2 - p0;
+  h.ng = glm::normalize(glm::cross(h.dpdu, h.dpdv));
+  if (!nrm_.empty()) {
+    const Vec3 &n0 = nrm_[t[0]], &n1 = nrm_[t[1]], &n2 = nrm_[t[2]];
+    const Vec3 a = b0 * n0 + b1 * n1 + b2 * n2;
+    const double len = glm::length(a);
+    if (len > 0) {
+      h.n = a / len;
+      // d(a/|a|) = (I - n n^T) da / |a| with da/du = n1 - n0, da/dv = n2 - n0.
+      const Vec3 dau = n1 - n0, dav = n2 - n0;
+      h.dndu = (dau - glm::dot(h.n, dau) * h.n) / len;
+      h.dndv = (dav - glm::dot(h.n, dav) * h.n) / len;
+    } else {
+      h.n = h.ng;
+    }
+    if (glm::dot(h.ng, h.n) < 0) h.ng = -h.ng;  // geometric normal on the side of the shading normal
+  } else {
+    h.n = h.ng;
+  }
+  if (flip_) {
+    h.n = -h.n;
+    h.ng = -h.ng;
+    h.dndu = -h.dndu;
+    h.dndv = -h.dndv;
+  }
+  // Embree intersects in float: the bound covers its float arithmetic on coordinates of this
+  // magnitude (pbrt-v3 Sec. 3.9.6 uses gamma_7 for its own float test; we allow more for
+  // Embree's different formulation and for the float rounding of the ray origin).
+  // Isotropic: Embree's plane and edge tests mix all coordinates, so a triangle lying in z = 0
+  // still needs an offset in z.
+  const Vec3 mag = glm::abs(b0 * p0) + glm::abs(b1 * p1) + glm::abs(b2 * p2);
+  h.p_error = Vec3(gamma_f(32) * std::max({mag.x, mag.y, mag.z}));
+  return h;
+}
+
+Hit TriangleMesh::refine_hit(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float) const {
+  const glm::uvec3 tri = tris_[prim];
+  const Vec3 &p0 = pos_[tri[0]], &p1 = pos_[tri[1]], &p2 = pos_[tri[2]];
+  const Vec3 e1 = p1 - p0, e2 = p2 - p0, nrm = glm::cross(e1, e2);
+  const double den = glm::dot(nrm, ray.d);
+  double t = t_float;
+  Vec2 uv = uv_float;
+  if (den != 0) {
+    t = glm::dot(nrm, p0 - ray.o) / den;
+    const Vec3 w = ray.at(t) - p0;
+    const double d00 = glm::dot(e1, e1), d01 = glm::dot(e1, e2), d11 = glm::dot(e2, e2);
+    const double d20 = glm::dot(w, e1), d21 = glm::dot(w, e2);
+    const double denom = difference_of_products(d00, d11, d01, d01);
+    if (denom > 0) {
+      double b1 = difference_of_products(d11, d20, d01, d21) / denom;
+      double b2 = difference_of_products(d00, d21, d01, d20) / denom;
+      b1 = std::max(b1, 0.0);
+      b2 = std::max(b2, 0.0);
+      const double s = b1 + b2;
+      if (s > 1) {
+        b1 /= s;
+        b2 /= s;
+      }
+      uv = {b1, b2};
+    }
+  }
+  Hit h = surface_at(prim, uv);
+  h.t = t;
+  return h;
+}
+
+Vec2 TriangleMesh::texcoord(uint32_t prim, const Vec2& uv) const {
+  if (uv_.empty()) return uv;
+  const glm::uvec3 t = tris_[prim];
+  return (1 - uv.x - uv.y) * uv_[t[0]] + uv.x * uv_[t[1]] + uv.y * uv_[t[2]];
+}
+
+AreaSample TriangleMesh::sample_area(const Vec2& u) const {
+  const double target = u.x * total_area_;
+  const auto it = std::upper_bound(cdf_.begin(), cdf_.end(), target);
+  const uint32_t prim = static_cast<uint32_t>(std::min<ptrdiff_t>(it - cdf_.begin(), static_cast<ptrdiff_t>(cdf_.size()) - 1));
+  const double lo = prim == 0 ? 0.0 : cdf_[prim - 1];
+  const double width = cdf_[prim] - lo;
+  const double s = width > 0 ? std::clamp((target - lo) / width, 0.0, 1.0) : 0.0;  // re-used uniform
+  const double su = std::sqrt(s);
+  return {surface_at(prim, {su * (1 - u.y), su * u.y}), 1.0 / total_area_};
+}
+
+}  // namespace tb

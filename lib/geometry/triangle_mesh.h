@@ -1,0 +1,59 @@
+// Triangle meshes in world space, optionally with per-vertex shading normals and texture
+// coordinates. Positions are rounded to float on construction, so that the double-precision
+// geometry computed here is that of the very triangles Embree intersects.
+//
+// Parameterisation of a hit: uv = barycentric coordinates (b1, b2) within triangle prim_id,
+// p = (1 - b1 - b2) p0 + b1 p1 + b2 p2; so dp/du = p1 - p0, dp/dv = p2 - p0. The shading normal
+// is the normalised linear interpolation of the vertex normals, and dn/du, dn/dv are its exact
+// derivatives (I - n n^T) (n1 - n0) / |n~| etc. Texture coordinates are an attribute
+// (texcoord()), not the parameterisation.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "lib/geometry/area_sample.h"
+#include "lib/geometry/bounds.h"
+#include "lib/geometry/hit.h"
+#include "lib/geometry/ray.h"
+
+namespace tb {
+
+class TriangleMesh {
+ public:
+  TriangleMesh(std::vector<Vec3> positions, std::vector<glm::uvec3> triangles, std::vector<Vec3> normals = {},
+               std::vector<Vec2> texcoords = {}, bool flip_normal = false);
+
+  size_t triangle_count() const { return tris_.size(); }
+  const std::vector<Vec3>& positions() const { return pos_; }
+  const std::vector<glm::uvec3>& triangles() const { return tris_; }
+  bool has_normals() const { return !nrm_.empty(); }
+
+  // Differential geometry at barycentrics uv = (b1, b2) of triangle `prim`.
+  Hit surface_at(uint32_t prim, const Vec2& uv) const;
+  // Re-intersects the double ray with triangle `prim` (plane intersection, barycentrics clamped
+  // to the triangle): refines a float hit reported by Embree. Falls back to (t, uv) given.
+  Hit refine_hit(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float) const;
+  Vec2 texcoord(uint32_t prim, const Vec2& uv) const;
+
+  double area() const { return total_area_; }
+  double triangle_area(uint32_t prim) const;
+  // Uniform by area: triangle chosen by area (u.x, re-used), uniform barycentrics
+  // (b0 = 1 - sqrt(s)); density 1 / area() per unit area.
+  AreaSample sample_area(const Vec2& u) const;
+  double pdf_area() const { return 1.0 / total_area_; }
+
+ private:
+  std::vector<Vec3> pos_;
+  std::vector<glm::uvec3> tris_;
+  std::vector<Vec3> nrm_;
+  std::vector<Vec2> uv_;
+  std::vector<double> cdf_;  // cumulative triangle areas, cdf_.back() == total_area_
+  double total_area_ = 0;
+  bool flip_;
+};
+
+}  // namespace tb

@@ -1,0 +1,195 @@
+// Deterministic identities of the generic estimators (tolerance 1e-12 relative):
+// MMIS with T = 1 equals SMIS; MMIS whose techniques are all classical (extruded, or in the split
+// classical sum) equals multi-sample balance-heuristic MIS; the split and extruded forms of mixing
+// classical and marginal techniques agree; MIS weights sum to one; pdf-evaluation counts are n·N·T.
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "analytic/classical_techniques_1d.h"
+#include "analytic/integrands.h"
+#include "analytic/marginal_techniques_1d.h"
+#include "estimators/any_marginal_technique.h"
+#include "estimators/extruded_technique.h"
+#include "estimators/mc.h"
+#include "estimators/mis.h"
+#include "estimators/mis_heuristics.h"
+#include "estimators/mmis.h"
+#include "estimators/smis.h"
+#include "estimators/technique_subset.h"
+#include "lib/core/rng.h"
+
+namespace tb {
+namespace {
+
+static_assert(Technique<Classical1D>);
+static_assert(Technique<ExactMarginal1D>);
+static_assert(MarginalTechnique<ConditionalNormal1D>);
+static_assert(MarginalTechnique<ExtrudedTechnique<Classical1D>>);
+static_assert(MarginalTechnique<AnyMarginalTechnique<ExtrudedTechnique<Classical1D>, ConditionalNormal1D>>);
+
+constexpr double kTol = 1e-12;
+
+std::vector<Classical1D> classical_set() {
+  return {Classical1D(UniformTechnique1D{0.0, 1.0}), Classical1D(TruncatedNormalTechnique1D(0.3, 0.1)),
+          Classical1D(PiecewiseConstantTechnique1D({0.0, 0.5, 0.8, 1.0}, {1.0, 3.0, 0.5}))};
+}
+
+ConditionalNormal1D centre_technique(double defensive = 0.0) {
+  ConditionalNormal1D::Params p;
+  p.name = "centre";
+  p.t_dist = Classical1D(UniformTechnique1D{0.5, 0.9});
+  p.mode = ConditionalNormal1D::Mode::kCentre;
+  p.fixed = 0.05;
+  p.defensive = defensive;
+  return ConditionalNormal1D(p);
+}
+
+ConditionalNormal1D width_technique() {
+  ConditionalNormal1D::Params p;
+  p.name = "width";
+  p.t_dist = Classical1D(UniformTechnique1D{0.02, 0.3});
+  p.mode = ConditionalNormal1D::Mode::kWidth;
+  p.fixed = 0.3;
+  p.defensive = 0.1;
+  return ConditionalNormal1D(p);
+}
+
+void expect_close(double a, double b) { EXPECT_NEAR(a, b, kTol * std::max(1.0, std::abs(b))); }
+
+TEST(Mmis, EqualsSmisForOneTechniqueSpace) {
+  const auto& f = integrand_1d("gaussian_mixture");
+  const std::array<ConditionalNormal1D, 1> m{centre_technique(0.2)};
+  for (int n : {1, 2, 5, 16}) {
+    for (uint64_t rep = 0; rep < 20; ++rep) {
+      Rng r1 = Rng::for_sample(7, n, rep), r2 = r1;
+      RngUniforms u1(r1), u2(r2);
+      const std::array<int, 1> counts{n};
+      const Estimate a = estimate_mmis(f, std::span<const ConditionalNormal1D>(m), std::span<const int>(counts), u1);
+      const Estimate b = estimate_smis(f, m[0], n, u2);
+      expect_close(a.value, b.value);
+      EXPECT_EQ(a.pdf_evals, b.pdf_evals);
+      EXPECT_EQ(a.pdf_evals, int64_t{n} * n);
+    }
+  }
+}
+
+TEST(Mmis, AllClassicalEqualsBalanceMis) {
+  const auto& f = integrand_1d("product");
+  const auto cs = classical_set();
+  std::vector<ExtrudedTechnique<Classical1D>> extruded;
+  for (const auto& c : cs) extruded.push_back({c});
+  const std::vector<int> counts{3, 1, 4};
+  for (uint64_t rep = 0; rep < 50; ++rep) {
+    Rng r1 = Rng::for_sample(11, 0, rep), r2 = r1, r3 = r1;
+    RngUniforms u1(r1), u2(r2), u3(r3);
+    const Estimate mis = estimate_mis(f, std::span<const Classical1D>(cs), std::span<const int>(counts), u1);
+    const Estimate ext = estimate_mmis(f, std::span<const ExtrudedTechnique<Classical1D>>(extruded),
+                                       std::span<const int>(counts), u2);
+    const Estimate split = estimate_mmis(f, std::span<const Classical1D>(cs), std::span<const int>(counts),
+                                         std::span<const ConditionalNormal1D>{}, std::span<const int>{}, u3);
+    expect_close(ext.value, mis.value);
+    expect_close(split.value, mis.value);
+    EXPECT_EQ(split.pdf_evals, mis.pdf_evals);  // split form: one evaluation per classical technique
+    EXPECT_EQ(ext.pdf_evals, 8 * 8);            // extruded form: one per sampled (identical) technique
+  }
+}
+
+TEST(Mmis, SplitAndExtrudedMixingAgree) {
+  using Any = AnyMarginalTechnique<ExtrudedTechnique<Classical1D>, ConditionalNormal1D>;
+  const auto& f = integrand_1d("fig1_two_features");
+  const std::vector<Classical1D> cls{Classical1D(TruncatedNormalTechnique1D(0.22, 0.1))};
+  const std::vector<ConditionalNormal1D> mar{centre_technique(), width_technique()};
+  const std::vector<Any> all{Any(ExtrudedTechnique<Classical1D>{cls[0]}), Any(mar[0]), Any(mar[1])};
+  for (int n : {1, 3, 8}) {
+    const std::vector<int> nc{n}, nm{n, n}, na{n, n, n};
+    for (uint64_t rep = 0; rep < 20; ++rep) {
+      Rng r1 = Rng::for_sample(13, n, rep), r2 = r1;
+      RngUniforms u1(r1), u2(r2);
+      const Estimate split = estimate_mmis(f, std::span<const Classical1D>(cls), std::span<const int>(nc),
+                                           std::span<const ConditionalNormal1D>(mar), std::span<const int>(nm), u1);
+      const Estimate ext = estimate_mmis(f, std::span<const Any>(all), std::span<const int>(na), u2);
+      expect_close(split.value, ext.value);
+      EXPECT_EQ(ext.pdf_evals, int64_t{3 * n} * (3 * n));
+      EXPECT_EQ(split.pdf_evals, int64_t{3 * n} * (2 * n + 1));
+    }
+  }
+}
+
+TEST(Mmis, CostIsnNT) {
+  // MMIS_n with budget N: N / (nT) realisations of n pairs from each of T techniques cost n·N·T.
+  const auto& f = integrand_1d("smooth");
+  const std::vector<ConditionalNormal1D> mar{centre_technique(0.1), width_technique(), centre_technique(0.5),
+                                             width_technique()};
+  const int big_n = 64, t = 4;
+  for (int n : {1, 2, 4, 8, 16}) {
+    Rng r(3);
+    RngUniforms u(r);
+    int64_t evals = 0;
+    const std::vector<int> counts(t, n);
+    for (int k = 0; k < big_n / (n * t); ++k)
+      evals += estimate_mmis(f, std::span<const ConditionalNormal1D>(mar), std::span<const int>(counts), u).pdf_evals;
+    EXPECT_EQ(evals, int64_t{n} * big_n * t);
+  }
+}
+
+TEST(MisHeuristics, WeightsSumToOne) {
+  const AnyHeuristic hs[] = {BalanceHeuristic{}, PowerHeuristic{}, PowerHeuristic{3.0}, MaximumHeuristic{},
+                             CutoffHeuristic{0.3}};
+  Rng r(5);
+  for (int rep = 0; rep < 1000; ++rep) {
+    std::vector<double> q(1 + rep % 6);
+    for (double& v : q) v = r.uniform() < 0.2 ? 0.0 : std::exp(20.0 * (r.uniform() - 0.5));
+    if (rep % 7 == 0) q[0] = q.back();  // ties for the maximum heuristic
+    bool any = false;
+    for (double v : q) any |= v > 0.0;
+    for (const auto& h : hs) {
+      double s = 0.0;
+      for (size_t i = 0; i < q.size(); ++i) {
+        const double w = mis_weight(h, q, i);
+        EXPECT_GE(w, 0.0);
+        s += w;
+      }
+      if (any) {
+        EXPECT_NEAR(s, 1.0, kTol);
+      }
+    }
+  }
+  EXPECT_THROW(heuristic_by_name("nope"), std::invalid_argument);
+}
+
+TEST(Mis, OneSampleBalanceOnConstantRatioIsExact) {
+  // f proportional to the balance mixture Σ c_k p_k: every one-sample estimate equals the integral.
+  const auto cs = classical_set();
+  const std::vector<double> c{0.2, 0.5, 0.3};
+  auto f = [&](double x) { return 2.0 * (c[0] * cs[0].pdf(x) + c[1] * cs[1].pdf(x) + c[2] * cs[2].pdf(x)); };
+  Rng r(9);
+  RngUniforms u(r);
+  for (int rep = 0; rep < 100; ++rep)
+    expect_close(estimate_one_sample_mis(f, std::span<const Classical1D>(cs), std::span<const double>(c), u).value, 2.0);
+}
+
+TEST(Mc, ExactForIntegrandProportionalToPdf) {
+  const Classical1D p(TruncatedNormalTechnique1D(0.3, 0.1));
+  auto f = [&](double x) { return 3.0 * p.pdf(x); };
+  Rng r(1);
+  RngUniforms u(r);
+  expect_close(estimate_mc(f, p, 100, u).value, 3.0);
+}
+
+TEST(TechniqueSubset, KeepsAlwaysAndChoosesK) {
+  Rng r(2);
+  RngUniforms u(r);
+  const std::vector<int> counts{2, 2, 2, 2};
+  const std::array<bool, 4> always{false, false, false, true};
+  for (int rep = 0; rep < 100; ++rep) {
+    const auto out = random_subset_counts(counts, always, 2, u);
+    EXPECT_EQ(out[3], 2);
+    EXPECT_EQ((out[0] > 0) + (out[1] > 0) + (out[2] > 0), 2);
+  }
+}
+
+}  // namespace
+}  // namespace tb

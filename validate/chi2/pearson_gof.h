@@ -1,0 +1,42 @@
+// Pearson's chi-square goodness of fit of observed counts against expected counts
+// (VALIDATION.md A). Cells with expected count below a threshold (5) are pooled into one
+// cell, as Mitsuba 3's chi2 test does; any observation in a cell of zero expected mass fails
+// hard (p = 0) and names the cell. dof = cells after pooling - 1; the p-value is the upper
+// tail of Boost.Math's chi_squared distribution.
+#pragma once
+
+#include <cstddef>
+#include <functional>
+#include <span>
+#include <string>
+
+namespace tb {
+
+struct PearsonOptions {
+  double min_expected = 5.0;  // cells below this expected count are pooled
+};
+
+struct PearsonResult {
+  double statistic = 0;       // sum (O - E)^2 / E over the cells after pooling
+  int dof = 0;                // cells after pooling - 1
+  double p_value = 1;         // P(chi2_dof >= statistic); 0 on a zero-expected violation
+  size_t cells = 0;           // cells after pooling
+  size_t pooled_cells = 0;    // input cells merged into the pooled cell
+  double pooled_expected = 0, pooled_observed = 0;
+  // Observations where the expected count is exactly zero: a hard failure.
+  double zero_expected_observed = 0;
+  size_t zero_expected_cells = 0;
+  std::string first_zero_expected_cell;  // name of the first such cell
+  std::string message;                   // one line
+
+  bool rejects(double alpha) const { return p_value < alpha; }
+};
+
+// observed and expected have the same length; expected counts are in the same units as the
+// observations (normalised to the number of samples). cell_name(i) names cell i in messages
+// (default: "cell i").
+PearsonResult pearson_chi2_gof(std::span<const double> observed, std::span<const double> expected,
+                               const PearsonOptions& options = {},
+                               const std::function<std::string(size_t)>& cell_name = {});
+
+}  // namespace tb

@@ -1,0 +1,134 @@
+#include "validate/image_compare.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include <boost/math/distributions/normal.hpp>
+#include <fmt/format.h>
+
+namespace tb {
+namespace {
+
+// Normal quantile with the same two-sided tail as p, signed like t. p = 0 (underflow) maps to
+// |z| = 38, beyond which the normal tail underflows double anyway.
+double z_from_two_sided_p(double p, double t) {
+  constexpr double kZCap = 38.0;
+  double z;
+  if (p <= 0.0)
+    z = kZCap;
+  else if (p >= 1.0)
+    z = 0.0;
+  else
+    z = std::min(kZCap, boost::math::quantile(boost::math::complement(boost::math::normal_distribution<double>(), 0.5 * p)));
+  return t < 0 ? -z : z;
+}
+
+}  // namespace
+
+double ImageCompareResult::p_value() const {
+  const double p_min = zero_variance_mismatch > 0 ? 0.0 : std::min({p_pixel_family, stouffer.p_value, sum_z2.p_value});
+  return stats::sidak_adjust(p_min, 3);
+}
+
+std::string ImageCompareResult::message() const {
+  return fmt::format(
+      "{}: P={} pixel-channels, mean rel. diff {:+.3g}; Stouffer Z={:.3g} (p={:.3g}), sum z^2={:.4g} (p={:.3g}), "
+      "worst pixel ({}, {}) ch {} t={:.3g} p={:.3g} (family p={:.3g}){}; alpha={} ({} per test)",
+      rejects() ? "different" : "consistent", tested, mean_relative_difference, stouffer.statistic, stouffer.p_value,
+      sum_z2.statistic, sum_z2.p_value, worst.x, worst.y, worst.channel, worst.t, worst.p, p_pixel_family,
+      zero_variance_mismatch > 0 ? fmt::format(", {} zero-variance mismatches", zero_variance_mismatch) : "", alpha,
+      alpha_each);
+}
+
+nlohmann::json ImageCompareResult::details() const {
+  return {{"alpha", alpha},
+          {"alpha_each", alpha_each},
+          {"alpha_pixel", alpha_pixel},
+          {"tested", tested},
+          {"skipped_identical", skipped_identical},
+          {"zero_variance_mismatch", zero_variance_mismatch},
+          {"worst", {{"x", worst.x}, {"y", worst.y}, {"channel", worst.channel}, {"mean_a", worst.mean_a},
+                     {"mean_b", worst.mean_b}, {"t", worst.t}, {"dof", worst.dof}, {"p", worst.p}}},
+          {"p_pixel_family", p_pixel_family},
+          {"stouffer_z", stouffer.statistic},
+          {"stouffer_p", stouffer.p_value},
+          {"sum_z2", sum_z2.statistic},
+          {"sum_z2_dof", sum_z2.dof},
+          {"sum_z2_p", sum_z2.p_value},
+          {"mean_relative_difference", mean_relative_difference},
+          {"rejects", rejects()}};
+}
+
+ImageCompareResult compare_welch_images(const WelchImage& a, const WelchImage& b, double alpha) {
+  if (a.width != b.width || a.height != b.height)
+    throw std::invalid_argument(
+        fmt::format("compare_welch_images: sizes differ ({}x{} vs {}x{})", a.width, a.height, b.width, b.height));
+  ImageCompareResult r;
+  r.alpha = alpha;
+  r.alpha_each = stats::sidak_alpha(alpha, 3);
+  std::vector<double> z;
+  z.reserve(a.pixels() * 3);
+  double min_p = 2.0, sum_diff = 0.0, sum_b = 0.0;
+  for (size_t i = 0; i < a.pixels(); ++i) {
+    const int64_t na = a.count[i], nb = b.count[i];
+    if (na < 2 && nb < 2)
+      throw std::invalid_argument(fmt::format("compare_welch_images: pixel {} has fewer than 2 Welch samples in both", i));
+    const Rgb ma = a.mean(i), mb = b.mean(i), va = a.variance(i), vb = b.variance(i);
+    for (int c = 0; c < 3; ++c) {
+      PixelChannelTest pc;
+      pc.x = static_cast<int>(i % size_t(a.width));
+      pc.y = static_cast<int>(i / size_t(a.width));
+      pc.channel = c;
+      pc.mean_a = ma[c];
+      pc.mean_b = mb[c];
+      const double se2 = (na >= 2 ? va[c] / double(na) : 0.0) + (nb >= 2 ? vb[c] / double(nb) : 0.0);
+      if (se2 == 0.0) {
+        if (ma[c] == mb[c]) {
+          ++r.skipped_identical;
+        } else {
+          ++r.zero_variance_mismatch;
+          pc.p = 0.0;
+          pc.t = ma[c] > mb[c] ? kInfinity : -kInfinity;
+          if (min_p > 0.0) {
+            min_p = 0.0;
+            r.worst = pc;
+          }
+        }
+        continue;
+      }
+      stats::TestResult t;
+      if (na >= 2 && nb >= 2)
+        t = stats::welch_t_test(ma[c], va[c], na, mb[c], vb[c], nb);
+      else if (na >= 2)
+        t = stats::one_sample_t_test(ma[c], std::sqrt(va[c]), na, mb[c]);
+      else {
+        t = stats::one_sample_t_test(mb[c], std::sqrt(vb[c]), nb, ma[c]);
+        t.statistic = -t.statistic;  // keep the sign convention a - b
+      }
+      pc.t = t.statistic;
+      pc.dof = t.dof;
+      pc.p = t.p_value;
+      pc.z = z_from_two_sided_p(t.p_value, t.statistic);
+      z.push_back(pc.z);
+      sum_diff += ma[c] - mb[c];
+      sum_b += mb[c];
+      if (pc.p < min_p) {
+        min_p = pc.p;
+        r.worst = pc;
+      }
+    }
+  }
+  r.tested = static_cast<int64_t>(z.size());
+  r.mean_relative_difference = sum_b != 0.0 ? sum_diff / sum_b : 0.0;
+  if (r.tested > 0) {
+    r.alpha_pixel = stats::sidak_alpha(r.alpha_each, r.tested);
+    r.p_pixel_family = stats::sidak_adjust(std::min(min_p, 1.0), r.tested);
+    r.stouffer = stats::stouffer(z);
+    r.sum_z2 = stats::sum_z2_test(z);
+  }
+  return r;
+}
+
+}  // namespace tb

@@ -1,0 +1,54 @@
+// Comparison of two images of Welch samples (Jung, Hanika & Dachsbacher 2020; VALIDATION.md A).
+// Per pixel and channel, Welch's two-sample t-test of the means of the Welch samples
+// (validate/stats welch_t_test; one-sample t-test when one image has fewer than two Welch
+// samples there, i.e. is a known reference). Three tests, each at alpha_each =
+// Šidák(alpha, 3) so that the comparison as a whole has level alpha:
+//   (1) pixel-wise: reject if min p < Šidák(alpha_each, P) over the P pixel-channels tested;
+//   (2) Stouffer: Z = sum z_i / sqrt(P) (uniform-sign bias, e.g. a 2% scale error);
+//   (3) sum z_i^2 against chi^2_P (mixed-sign bias).
+// z_i is the normal quantile with the same two-sided p-value and the sign of t_i, so z_i is
+// standard normal under H0 whatever the Welch dof. Pixel-channels where both images have zero
+// variance are skipped when their means agree and count as hard failures when they differ.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "lib/film/welch_image.h"
+#include "validate/stats/tests.h"
+
+namespace tb {
+
+struct PixelChannelTest {
+  int x = -1, y = -1, channel = -1;
+  double mean_a = 0, mean_b = 0;
+  double t = 0, dof = 0, p = 1, z = 0;
+};
+
+struct ImageCompareResult {
+  double alpha = 0, alpha_each = 0, alpha_pixel = 0;
+  int64_t tested = 0;               // P
+  int64_t skipped_identical = 0;    // zero variance in both, equal means
+  int64_t zero_variance_mismatch = 0;
+  PixelChannelTest worst;           // smallest p
+  double p_pixel_family = 1;        // Šidák-adjusted smallest p: 1 - (1 - p_min)^P
+  stats::TestResult stouffer, sum_z2;
+  double mean_relative_difference = 0;  // sum(mean_a - mean_b) / sum(mean_b), for messages
+
+  bool rejects_pixel() const { return zero_variance_mismatch > 0 || p_pixel_family < alpha_each; }
+  bool rejects_stouffer() const { return stouffer.p_value < alpha_each; }
+  bool rejects_sum_z2() const { return sum_z2.p_value < alpha_each; }
+  bool rejects() const { return rejects_pixel() || rejects_stouffer() || rejects_sum_z2(); }
+  // The smallest of the three family p-values, Šidák-adjusted over the three tests.
+  double p_value() const;
+  std::string message() const;
+  nlohmann::json details() const;
+};
+
+// Throws std::invalid_argument if the sizes differ or a pixel has fewer than two Welch samples
+// in both images.
+ImageCompareResult compare_welch_images(const WelchImage& a, const WelchImage& b, double alpha);
+
+}  // namespace tb
