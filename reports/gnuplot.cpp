@@ -16,13 +16,16 @@ std::string quote(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
     if (c == '"' || c == '\\') out += '\\';
-    if (c == '_') {
-      out += "\\\\_";  // gnuplot enhanced text: a literal underscore
-      continue;
-    }
     out += c;
   }
   return out + "\"";
+}
+
+// A file name for gnuplot: single-quoted, no enhanced-text escapes.
+std::string quote_path(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += (c == '\'' ? std::string("''") : std::string(1, c));
+  return out + "'";
 }
 
 double num(const nlohmann::json& v) {
@@ -43,12 +46,12 @@ std::optional<std::string> render_plot(const nlohmann::json& plot, const std::st
   const std::string dat = basename + ".dat", svg = basename + ".svg";
   std::ostringstream data, gp;
   gp << "set terminal svg size 640,420 dynamic enhanced font 'Helvetica,12' background rgb 'white'\n";
-  gp << "set output " << quote((fs::path(dir) / svg).string()) << "\n";
-  gp << "set title " << quote(plot.value("title", "")) << "\n";
-  gp << "set xlabel " << quote(plot.value("x_label", "")) << "\n";
-  gp << "set ylabel " << quote(plot.value("y_label", "")) << "\n";
-  gp << "set grid\nset key outside right top\n";
-  const std::string datpath = quote((fs::path(dir) / dat).string());
+  gp << "set output " << quote_path((fs::path(dir) / svg).string()) << "\n";
+  gp << "set title " << quote(plot.value("title", "")) << " noenhanced\n";
+  gp << "set xlabel " << quote(plot.value("x_label", "")) << " noenhanced\n";
+  gp << "set ylabel " << quote(plot.value("y_label", "")) << " noenhanced\n";
+  gp << "set grid\nset key inside top right box opaque font \",10\"\n";
+  const std::string datpath = quote_path((fs::path(dir) / dat).string());
 
   if (plot.contains("heatmap")) {
     const auto& rows = plot["heatmap"];
@@ -82,7 +85,7 @@ std::optional<std::string> render_plot(const nlohmann::json& plot, const std::st
       data << "\n\n";
       std::string style = s.value("style", "linespoints");
       if (err) style = "yerrorlines";
-      clauses.push_back(fmt::format("{} index {} using 1:2{} with {} title {}", datpath, block, err ? ":3" : "",
+      clauses.push_back(fmt::format("{} index {} using 1:2{} with {} title {} noenhanced", datpath, block, err ? ":3" : "",
                                     style, quote(s.value("label", ""))));
       ++block;
     }
