@@ -1,6 +1,7 @@
 // MMIS_n estimates per second at the budget N = 64 with T = 4 marginal techniques (West et al. 2022,
 // Fig. 1 bottom), n = 1..16, against the bare cost of the n·N·T conditional pdf evaluations it makes.
 //   BM_MmisBudget/n      one estimate: N / (nT) realisations of Eq. 6, sampling included
+//   BM_MmisEvaluate/n    Eq. 6 evaluated over pairs drawn beforehand (the estimator without sampling)
 //   BM_BarePdfEvals/n    the same n·N·T evaluations of p(x | t) over pre-sampled (x, t), nothing else
 // Cost linear in n shows as a log-log slope of 1 of time against n (docs/estimators.md).
 #include <vector>
@@ -32,6 +33,29 @@ void BM_MmisBudget(benchmark::State& state) {
 }
 BENCHMARK(BM_MmisBudget)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Arg(16);
 
+// The estimator's evaluation of Eq. 6 alone, over pairs drawn beforehand: what it adds to the
+// bare pdf evaluations (denominator sums, f, the estimate's bookkeeping).
+void BM_MmisEvaluate(benchmark::State& state) {
+  const Fig1Bottom b = make_fig1_bottom();
+  const int n = static_cast<int>(state.range(0));
+  const int realisations = kBudget / (n * static_cast<int>(b.techniques.size()));
+  Rng rng(42);
+  RngUniforms u(rng);
+  const std::span<const ConditionalNormal1D> tech(b.techniques);
+  const std::vector<int> counts(b.techniques.size(), n);
+  using NC = NoClassical<double>;
+  std::vector<MmisDraw<double, ConditionalNormal1D::Aux>> draws;
+  for (int r = 0; r < realisations; ++r)
+    draws.push_back(draw_mmis(std::span<const NC>{}, std::span<const int>{}, tech, std::span<const int>(counts), u));
+  for (auto _ : state) {
+    double s = 0.0;
+    for (const auto& d : draws) s += evaluate_mmis(*b.f, std::span<const NC>{}, std::span<const int>{}, tech, d).value;
+    benchmark::DoNotOptimize(s);
+  }
+  state.counters["estimates/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_MmisEvaluate)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Arg(16);
+
 void BM_BarePdfEvals(benchmark::State& state) {
   const Fig1Bottom b = make_fig1_bottom();
   const int n = static_cast<int>(state.range(0));
@@ -39,20 +63,21 @@ void BM_BarePdfEvals(benchmark::State& state) {
   const int realisations = kBudget / (n * t);
   Rng rng(42);
   RngUniforms u(rng);
-  // One realisation's pairs, reused: only the evaluations are timed.
-  std::vector<std::pair<size_t, ConditionalNormal1D::Aux>> aux;
-  std::vector<double> xs;
-  for (size_t i = 0; i < b.techniques.size(); ++i)
-    for (int j = 0; j < n; ++j) {
-      const auto a = b.techniques[i].sample_aux(u);
-      aux.push_back({i, *a});
-      xs.push_back(*b.techniques[i].sample(*a, u));
-    }
+  // The same draws as BM_MmisEvaluate (same seed): only the pdf evaluations are timed.
+  std::vector<std::vector<std::pair<size_t, ConditionalNormal1D::Aux>>> aux(static_cast<size_t>(realisations));
+  std::vector<std::vector<double>> xs(static_cast<size_t>(realisations));
+  for (int r = 0; r < realisations; ++r)
+    for (size_t i = 0; i < b.techniques.size(); ++i)
+      for (int j = 0; j < n; ++j) {
+        const auto a = b.techniques[i].sample_aux(u);
+        aux[r].push_back({i, *a});
+        xs[r].push_back(*b.techniques[i].sample(*a, u));
+      }
   for (auto _ : state) {
     double s = 0.0;
     for (int r = 0; r < realisations; ++r)
-      for (double x : xs)
-        for (const auto& [i, a] : aux) s += b.techniques[i].pdf(x, a);
+      for (double x : xs[r])
+        for (const auto& [i, a] : aux[r]) s += b.techniques[i].pdf(x, a);
     benchmark::DoNotOptimize(s);
   }
   state.counters["estimates/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);

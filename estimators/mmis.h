@@ -28,66 +28,98 @@ struct MarginalGroup {
   std::span<const int> counts;
 };
 
-template <Technique C, MarginalTechnique M, Integrand<typename M::Sample> F>
+// The technique-sample pairs of one MMIS realisation: classical samples first, then the
+// marginal (t, x) pairs. Drawing them and evaluating Eq. 6 over them are separate steps so that
+// the evaluation (n·N·T conditional pdf evaluations) can be timed on its own.
+template <class X, class Aux>
+struct MmisDraw {
+  struct Pair {
+    size_t technique;
+    Aux t;
+  };
+  std::vector<Pair> aux;
+  std::vector<std::optional<X>> xs;
+  int64_t samples = 0, failed = 0;
+};
+
+template <Technique C, MarginalTechnique M>
   requires std::same_as<typename C::Sample, typename M::Sample>
-Estimate estimate_mmis(const F& f, std::span<const C> classical, std::span<const int> classical_counts,
-                       std::span<const M> marginal, std::span<const int> marginal_counts, Uniforms& u) {
-  using X = typename M::Sample;
+MmisDraw<typename M::Sample, typename M::Aux> draw_mmis(std::span<const C> classical,
+                                                       std::span<const int> classical_counts,
+                                                       std::span<const M> marginal,
+                                                       std::span<const int> marginal_counts, Uniforms& u) {
   if (classical.size() != classical_counts.size() || marginal.size() != marginal_counts.size())
     throw std::invalid_argument("estimate_mmis: one count per technique");
-  struct Aux {
-    size_t technique;
-    typename M::Aux t;
-  };
-  std::vector<Aux> aux;
-  std::vector<std::optional<X>> xs;
-  Estimate e;
-  // Classical samples first, then the marginal pairs: the order of uniforms is part of the estimator's
-  // definition (fixed so that runs are reproducible).
+  MmisDraw<typename M::Sample, typename M::Aux> d;
+  // The order of uniforms is part of the estimator's definition (fixed so runs are reproducible).
   for (size_t c = 0; c < classical.size(); ++c)
     for (int j = 0; j < classical_counts[c]; ++j) {
-      ++e.samples;
+      ++d.samples;
       auto x = classical[c].sample(u);
-      if (!x) ++e.failed;
-      xs.push_back(std::move(x));
+      if (!x) ++d.failed;
+      d.xs.push_back(std::move(x));
     }
   for (size_t m = 0; m < marginal.size(); ++m)
     for (int j = 0; j < marginal_counts[m]; ++j) {
-      ++e.samples;
+      ++d.samples;
       auto t = marginal[m].sample_aux(u);
       if (!t) {
-        ++e.failed;
+        ++d.failed;
         continue;
       }
       auto x = marginal[m].sample(*t, u);
-      if (!x) ++e.failed;
-      aux.push_back({m, *t});
-      xs.push_back(std::move(x));
+      if (!x) ++d.failed;
+      d.aux.push_back({m, *t});
+      d.xs.push_back(std::move(x));
     }
-  for (const auto& x : xs) {
+  return d;
+}
+
+// Eq. 6 (West et al. 2022) over drawn pairs: sum over samples of f(x) / (sum_c n_c p_c(x) +
+// sum_(i,j) p_i(x | t_ij)).
+template <Technique C, MarginalTechnique M, Integrand<typename M::Sample> F>
+  requires std::same_as<typename C::Sample, typename M::Sample>
+Estimate evaluate_mmis(const F& f, std::span<const C> classical, std::span<const int> classical_counts,
+                       std::span<const M> marginal, const MmisDraw<typename M::Sample, typename M::Aux>& d) {
+  Estimate e;
+  e.samples = d.samples;
+  e.failed = d.failed;
+  for (const auto& x : d.xs) {
     if (!x) continue;
-    double d = 0.0;
+    double den = 0.0;
     for (size_t c = 0; c < classical.size(); ++c)
       if (classical_counts[c] > 0) {
-        d += classical_counts[c] * static_cast<double>(classical[c].pdf(*x));
+        den += classical_counts[c] * static_cast<double>(classical[c].pdf(*x));
         ++e.pdf_evals;
       }
-    for (const Aux& a : aux) d += marginal[a.technique].pdf(*x, a.t);  // West et al. 2022, Eq. 6 denominator
-    e.pdf_evals += static_cast<int64_t>(aux.size());
-    e.add(safe_ratio(static_cast<double>(f(*x)), d));
+    for (const auto& a : d.aux) den += marginal[a.technique].pdf(*x, a.t);  // West et al. 2022, Eq. 6 denominator
+    e.pdf_evals += static_cast<int64_t>(d.aux.size());
+    e.add(safe_ratio(static_cast<double>(f(*x)), den));
   }
   return e;
 }
 
+template <Technique C, MarginalTechnique M, Integrand<typename M::Sample> F>
+  requires std::same_as<typename C::Sample, typename M::Sample>
+Estimate estimate_mmis(const F& f, std::span<const C> classical, std::span<const int> classical_counts,
+                       std::span<const M> marginal, std::span<const int> marginal_counts, Uniforms& u) {
+  const auto d = draw_mmis(classical, classical_counts, marginal, marginal_counts, u);
+  return evaluate_mmis(f, classical, classical_counts, marginal, d);
+}
+
+// A classical technique that is never sampled: lets the all-marginal form reuse the general one.
+template <class X>
+struct NoClassical {
+  using Sample = X;
+  std::optional<Sample> sample(Uniforms&) const { return std::nullopt; }
+  double pdf(const Sample&) const { return 0.0; }
+};
+
 // All techniques marginal (classical ones extruded): Eq. 6 as printed.
 template <MarginalTechnique M, Integrand<typename M::Sample> F>
 Estimate estimate_mmis(const F& f, std::span<const M> marginal, std::span<const int> marginal_counts, Uniforms& u) {
-  struct NoClassical {
-    using Sample = typename M::Sample;
-    std::optional<Sample> sample(Uniforms&) const { return std::nullopt; }
-    double pdf(const Sample&) const { return 0.0; }
-  };
-  return estimate_mmis(f, std::span<const NoClassical>{}, std::span<const int>{}, marginal, marginal_counts, u);
+  return estimate_mmis(f, std::span<const NoClassical<typename M::Sample>>{}, std::span<const int>{}, marginal,
+                       marginal_counts, u);
 }
 
 }  // namespace tb
