@@ -88,6 +88,11 @@ std::shared_ptr<const JsonDocument> JsonDocument::parse(const std::string& text,
     switch (event) {
       case E::object_start:
       case E::array_start: {
+        // Every open level stores its JSON pointer, so memory grows with depth^2; no scene
+        // or configuration nests anywhere near this deep.
+        constexpr size_t kMaxDepth = 256;
+        if (frames.size() >= kMaxDepth)
+          throw JsonError(fmt::format("{}:{}: JSON nested deeper than {} levels", file, line, kMaxDepth));
         const std::string ptr = child_pointer();
         doc->lines.emplace(ptr, line);
         frames.push_back(Frame{event == E::array_start, 0, "", ptr});

@@ -60,6 +60,10 @@ void parse_camera(const StrictObject& c, WorldBuilder& b) {
   const auto res = c.numbers("resolution");
   if (res.size() != 2 || res[0] < 1 || res[1] < 1 || res[0] != std::floor(res[0]) || res[1] != std::floor(res[1]))
     c.fail("resolution", "expected two positive integers [width, height]");
+  // Also keeps the int cast defined and the film allocation sane (a 16384^2 RGB film is 6 GiB).
+  constexpr double kMaxResolution = 16384;
+  if (res[0] > kMaxResolution || res[1] > kMaxResolution)
+    c.fail("resolution", fmt::format("each side must be at most {} pixels", kMaxResolution));
   s.width = static_cast<int>(res[0]);
   s.height = static_cast<int>(res[1]);
   if (type == "thin_lens") {
@@ -128,7 +132,11 @@ void parse_shape(const StrictObject& s, WorldBuilder& b, const std::string& base
   if (std::abs(xf.determinant()) < 1e-12) s.fail("transform", "is singular (zero scale?)");
   std::optional<TriangleMesh> mesh;
   if (type == "cube") {
-    mesh = make_cube(xf);
+    try {
+      mesh = make_cube(xf);
+    } catch (const std::invalid_argument& e) {
+      s.fail("transform", fmt::format("{} (degenerate cube)", e.what()));
+    }
   } else if (type == "obj") {
     std::string file = s.string("file");
     const std::filesystem::path p = std::filesystem::path(file).is_absolute() ? std::filesystem::path(file)
@@ -168,7 +176,9 @@ void parse_shape(const StrictObject& s, WorldBuilder& b, const std::string& base
       const auto& jn = s.raw("normals");
       if (!jn.is_array() || jn.size() != jp.size()) s.fail("normals", "expected one [x, y, z] per position");
       for (size_t i = 0; i < jn.size(); ++i) {
-        if (!jn[i].is_array() || jn[i].size() != 3) s.fail("normals", fmt::format("element {} is not [x, y, z]", i));
+        if (!jn[i].is_array() || jn[i].size() != 3 || !jn[i][0].is_number() || !jn[i][1].is_number() ||
+            !jn[i][2].is_number())
+          s.fail("normals", fmt::format("element {} is not [x, y, z]", i));
         const Vec3 v(jn[i][0].get<double>(), jn[i][1].get<double>(), jn[i][2].get<double>());
         const Vec3 w = glm::transpose(xf.inverse_linear()) * v;
         if (!is_finite(w) || glm::length(w) == 0) s.fail("normals", fmt::format("element {} is zero or not finite", i));
@@ -280,7 +290,9 @@ AffineTransform parse_transform(const StrictObject& o) {
     const auto& r = o.raw("rotate");
     if (!r.is_array()) o.fail("rotate", "expected an array of [axis_x, axis_y, axis_z, degrees]");
     for (size_t i = 0; i < r.size(); ++i) {
-      if (!r[i].is_array() || r[i].size() != 4) o.fail("rotate", fmt::format("element {} is not [ax, ay, az, deg]", i));
+      if (!r[i].is_array() || r[i].size() != 4 || !r[i][0].is_number() || !r[i][1].is_number() ||
+          !r[i][2].is_number() || !r[i][3].is_number())
+        o.fail("rotate", fmt::format("element {} is not [ax, ay, az, deg]", i));
       const Vec3 axis(r[i][0].get<double>(), r[i][1].get<double>(), r[i][2].get<double>());
       const double deg = r[i][3].get<double>();
       if (!is_finite(axis) || !std::isfinite(deg) || glm::length(axis) == 0)

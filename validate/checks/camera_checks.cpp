@@ -11,6 +11,7 @@
 #include "lib/camera/thin_lens_camera.h"
 #include "lib/core/hash.h"
 #include "lib/core/rng.h"
+#include "validate/chi2/direction_chart.h"
 #include "validate/chi2/sampler_chi2.h"
 #include "validate/registry.h"
 #include "validate/stats/tests.h"
@@ -226,6 +227,113 @@ CheckResult run_importance(const CheckContext&, bool broken) {
   return r;
 }
 
+// ---- sample_wi (light tracing connections) ------------------------------------------------
+// Thin lens: the lens point is uniform on the disk, so seen from a scene point `ref` the
+// direction wi lies in the small cone subtended by the lens, with stated density
+// d^2 / (cos_lens A_lens) w.r.t. solid angle at ref. It is tested on a zoomed cap around the
+// direction to the lens centre (validate/chi2/direction_chart.h, d omega = dx dy / z). The stated
+// pdf at an arbitrary direction w: the point where the line ref + t w crosses the lens plane
+// (camera z = 0), its lens uniforms, and sample_wi's pdf there (0 off the lens).
+SamplerChi2Result sample_wi_chi2(const CheckContext& ctx, const ThinLensCamera& cam, const Vec3& ref, bool broken,
+                                 const std::string& name) {
+  const PerspectiveProjection& proj = cam.projection();
+  const Vec3 to_eye = proj.eye() - ref;
+  const double d = glm::length(to_eye), R = cam.lens_radius();
+  // The lens disk lies within angle asin(R / d) of the axis; the orthographic chart coordinate
+  // of any of its points is at most sin of that angle = R / d. 5% margin.
+  const Chi2DirectionChart chart = Chi2DirectionChart::around(to_eye / d, 1.05 * R / d, 31);
+  const Vec3 ref_c = proj.to_camera_point(ref);
+  SamplerChi2Options o;
+  o.samples = ctx.size(200000, 1000000);
+  o.seed = ctx.seed;
+  o.key = hash_string((broken ? "camera.sample_wi.chi2.negative." : "camera.sample_wi.chi2.") + name);
+  o.quadrature_tolerance = 1e-7;
+  o.quadrature_max_depth = 4;  // rim cells: error ~1e-5 of a cell, far below 1/sqrt(E)
+  return chi2_test_zoomed(
+      chart,
+      [&](Vec2 u) -> std::optional<Vec3> {
+        const auto s = cam.sample_wi(ref, u);
+        if (!s) return std::nullopt;
+        return s->wi;
+      },
+      [&](const Vec3& w) {
+        const Vec3 w_c = proj.to_camera_dir(w);
+        if (!(w_c.z < 0.0)) return 0.0;
+        const Vec3 p = ref_c + (-ref_c.z / w_c.z) * w_c;
+        if (!(cam.pdf_lens_area({p.x, p.y}) > 0.0)) return 0.0;
+        const auto s = cam.sample_wi(ref, cam.lens_uniforms({p.x, p.y, 0.0}));
+        if (!s) return 0.0;
+        const double cos_lens = glm::dot(proj.forward(), -s->wi);
+        return broken ? s->pdf * cos_lens : s->pdf;  // broken: the cos factor dropped
+      },
+      o);
+}
+
+// Scene points seen by the base thin lens (eye + a right + b up + c forward): in focus
+// off-axis, far and out of focus, and close (a wide cone); every lens point maps into the image.
+std::vector<std::pair<std::string, Vec3>> sample_wi_refs(const PerspectiveProjection& proj) {
+  const auto at = [&](double a, double b, double c) { return proj.to_world_point(Vec3(a, b, c)); };
+  return {{"in_focus_off_axis", at(0.8, -0.5, 3.0)}, {"far_defocused", at(-1.0, 0.7, 9.0)},
+          {"close", at(0.3, 0.2, 1.4)}};
+}
+
+// The pinhole's sample_wi is a Dirac connection: it must return the unit direction to the eye.
+double pinhole_wi_error(const CheckContext& ctx, int64_t* bad) {
+  const PinholeCamera pin(base_setup());
+  double worst = 0;
+  for (int64_t i = 0; i < 1000; ++i) {
+    Rng rng = Rng::for_sample(ctx.seed, hash_string("camera.sample_wi.pinhole"), uint64_t(i));
+    const double z = 1.0 + 5.0 * rng.uniform();  // inside the view: |x|, |y| < 0.5 z
+    const Vec3 c((rng.uniform() - 0.5) * z, (rng.uniform() - 0.5) * z, z);
+    const Vec3 ref = pin.projection().to_world_point(c);
+    const auto s = pin.sample_wi(ref, rng.uniform2());
+    if (!s || !s->delta) {
+      ++*bad;
+      continue;
+    }
+    const Vec3 expect = glm::normalize(pin.projection().eye() - ref);
+    worst = std::max(worst, glm::length(s->wi - expect));
+  }
+  return worst;
+}
+
+CheckResult run_sample_wi_chi2(const CheckContext& ctx, bool broken) {
+  const ThinLensCamera cam(base_setup());
+  std::vector<std::pair<std::string, SamplerChi2Result>> cases;
+  for (const auto& [name, ref] : sample_wi_refs(cam.projection()))
+    if (!broken || name == "in_focus_off_axis") cases.emplace_back(name, sample_wi_chi2(ctx, cam, ref, broken, name));
+  const double alpha = stats::sidak_alpha(kChi2Alpha, int64_t(cases.size()));
+  CheckResult r;
+  r.alpha = alpha;
+  r.p_value = 1.0;
+  r.statistic_name = "min p";
+  bool all_pass = true;
+  std::string msg;
+  for (const auto& [name, s] : cases) {
+    all_pass = all_pass && s.passed(alpha);
+    r.p_value = std::min(r.p_value, s.p_value());
+    r.samples += s.samples;
+    r.details[name] = s.details();
+    msg += fmt::format("{}{}: p={:.3g} (off-chart/failed {})", msg.empty() ? "" : "; ", name, s.p_value(), s.failed);
+  }
+  r.statistic = r.p_value;
+  if (broken) {
+    r.passed = !all_pass;
+    r.message = fmt::format("negative control, pdf without cos_lens (must be rejected): {}", msg);
+    return r;
+  }
+  int64_t bad = 0;
+  const double pin_err = pinhole_wi_error(ctx, &bad);
+  constexpr double kPinTol = 1e-12;
+  r.passed = all_pass && bad == 0 && pin_err < kPinTol;
+  r.details["pinhole_max_direction_error"] = pin_err;
+  r.details["pinhole_failed_or_not_delta"] = bad;
+  r.message = fmt::format("thin-lens sample_wi directions vs stated pdf (solid angle at ref) on zoomed caps, {} "
+                          "points, Sidak alpha {:.3g}: {}; pinhole wi error {:.2g} (tol {}), {} failed/non-delta",
+                          cases.size(), alpha, msg, pin_err, kPinTol, bad);
+  return r;
+}
+
 TB_REGISTER_CHECK({.name = "camera.roundtrip",
                    .description = "raster -> generate_ray -> raster_from_ray recovers raster position and lens "
                                   "uniforms to 1e-9 for pinhole and thin-lens cameras",
@@ -253,6 +361,16 @@ TB_REGISTER_CHECK({.name = "camera.importance.normalisation_negative_control",
                    .description = "the normalisation check rejects a thin-lens We missing 1/(pi r^2)",
                    .kind = CheckKind::kDeterministic,
                    .run = [](const CheckContext& c) { return run_importance(c, true); }});
+
+TB_REGISTER_CHECK({.name = "camera.sample_wi.chi2",
+                   .description = "thin-lens sample_wi directions from 3 scene points against the stated pdf "
+                                  "(solid angle) on a zoomed cap, Sidak alpha 0.01; pinhole wi is the eye direction",
+                   .kind = CheckKind::kStatistical,
+                   .run = [](const CheckContext& c) { return run_sample_wi_chi2(c, false); }});
+TB_REGISTER_CHECK({.name = "camera.sample_wi.chi2_negative_control",
+                   .description = "the sample_wi chi-square rejects a pdf missing the cos factor at the lens",
+                   .kind = CheckKind::kStatistical,
+                   .run = [](const CheckContext& c) { return run_sample_wi_chi2(c, true); }});
 
 }  // namespace
 }  // namespace tb
