@@ -7,12 +7,28 @@
 
 namespace tb {
 
+// Deliberate errors for the negative controls of the integrator checks (VALIDATION.md: every
+// statistical check has a control that must fail). Never set by `tb render`.
+enum class IntegratorFault {
+  kNone,
+  kMisMissingDensity,   // an MIS weight computed with one density left out of its denominator
+  kNeeNoCosine,         // next-event estimation without the cosine at the receiving vertex
+  kRouletteNoInverse,   // Russian roulette that drops paths without dividing survivors by q
+};
+
 struct RenderSettings {
   int64_t spp = 16;          // samples per pixel in total
   int64_t passes = 8;        // Welch samples per pixel: spp is split evenly over the passes
-  int max_depth = 10;        // maximum number of scattering events
+  int max_depth = 10;        // maximum number of scattering events (path length in segments - 1)
   uint64_t seed = 1;
   double time_budget_s = 0;  // > 0: stop after the pass during which the budget ran out
+  bool russian_roulette = true;
+  int rr_min_depth = 3;      // roulette starts after this many scattering events
+  // Restrict bidirectional estimators to one path length (segments) / one technique (s, t):
+  // used by the per-technique checks. -1: all.
+  int only_length = -1;
+  int only_s = -1;           // with only_s >= 0 the single technique is unweighted (weight 1)
+  IntegratorFault fault = IntegratorFault::kNone;
   std::function<void(double)> progress = [](double) {};
   const std::atomic<bool>* interrupted = nullptr;  // stop between passes
 };

@@ -40,6 +40,7 @@ std::optional<LightLiSample> AreaLight::sample_li(const Vec3& ref, const Vec2& u
   ls.n_light = s.hit.n;
   ls.distance = dist;
   ls.pdf_area = s.pdf_area;
+  ls.hit = s.hit;
   return ls;
 }
 
@@ -64,6 +65,7 @@ std::optional<LightLeSample> AreaLight::sample_le(const Vec2& u_pos, const Vec2&
   e.le = le(s.hit.n, w);
   e.pdf_pos = s.pdf_area;
   e.pdf_dir = pdf_dir;
+  e.hit = s.hit;
   return e;
 }
 

@@ -25,6 +25,8 @@ std::optional<LightLiSample> DirectionalLight::sample_li(const Vec3& ref, const 
   s.pdf = 1.0;
   s.distance = 2.0 * sphere_.radius + glm::length(ref - sphere_.center);
   s.p_light = ref + s.wi * s.distance;
+  s.hit.p = s.p_light;
+  s.hit.n = s.hit.ng = s.n_light;
   return s;
 }
 
@@ -34,6 +36,8 @@ std::optional<LightLeSample> DirectionalLight::sample_le(const Vec2& u_pos, cons
   e.le = irradiance_;
   e.pdf_pos = 1.0 / (kPi * sphere_.radius * sphere_.radius);
   e.pdf_dir = 1.0;
+  e.hit.p = e.ray.o;
+  e.hit.n = e.hit.ng = e.n;
   return e;
 }
 
@@ -49,6 +53,8 @@ std::optional<LightLiSample> ConstantEnvironmentLight::sample_li(const Vec3& ref
   s.pdf = pdf_uniform_sphere();
   s.distance = kInfinity;
   s.p_light = ref + s.wi * (2.0 * sphere_.radius + glm::length(ref - sphere_.center));
+  s.hit.p = s.p_light;
+  s.hit.n = s.hit.ng = s.n_light;
   return s;
 }
 
@@ -63,6 +69,8 @@ std::optional<LightLeSample> ConstantEnvironmentLight::sample_le(const Vec2& u_p
   e.le = radiance_;
   e.pdf_pos = 1.0 / (kPi * sphere_.radius * sphere_.radius);
   e.pdf_dir = pdf_uniform_sphere();
+  e.hit.p = e.ray.o;
+  e.hit.n = e.hit.ng = e.n;
   return e;
 }
 

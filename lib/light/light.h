@@ -41,6 +41,8 @@ struct LightLiSample {
   Vec3 n_light{0.0};     // its normal (zero for point lights and infinite lights)
   double distance = kInfinity;  // to p_light, for the shadow ray
   double pdf_area = 0.0; // area density of p_light on the emitter (area lights only)
+  Hit hit;               // the emitter point: full geometry for area lights (shadow-ray spawning,
+                         // path vertices), p and n only for other lights
 };
 
 struct LightLeSample {
@@ -49,6 +51,8 @@ struct LightLeSample {
   Rgb le{0.0};           // emitted radiance / intensity along the ray
   double pdf_pos = 0.0;  // area measure (1 for delta position)
   double pdf_dir = 0.0;  // solid angle (1 for delta direction)
+  Hit hit;               // the emission point: full geometry for area lights (spawn the ray with
+                         // spawn_ray(hit, ray.d) to leave the surface robustly), p and n otherwise
 };
 
 class Light {

@@ -14,6 +14,8 @@ std::optional<LightLiSample> PointLight::sample_li(const Vec3& ref, const Vec2&)
   s.li = intensity_ / dist2;  // I / d^2: irradiance on a surface facing the light, per unit cos
   s.pdf = 1.0;                // delta
   s.p_light = p_;
+  s.hit.p = s.p_light;
+  s.hit.n = s.hit.ng = s.n_light;
   return s;
 }
 
@@ -23,6 +25,8 @@ std::optional<LightLeSample> PointLight::sample_le(const Vec2&, const Vec2& u_di
   e.le = intensity_;
   e.pdf_pos = 1.0;
   e.pdf_dir = pdf_uniform_sphere();
+  e.hit.p = e.ray.o;
+  e.hit.n = e.hit.ng = e.n;
   return e;
 }
 
@@ -56,6 +60,8 @@ std::optional<LightLiSample> SpotLight::sample_li(const Vec3& ref, const Vec2&) 
   if (is_black(s.li)) return std::nullopt;
   s.pdf = 1.0;
   s.p_light = p_;
+  s.hit.p = s.p_light;
+  s.hit.n = s.hit.ng = s.n_light;
   return s;
 }
 
@@ -66,6 +72,8 @@ std::optional<LightLeSample> SpotLight::sample_le(const Vec2&, const Vec2& u_dir
   e.le = intensity(e.ray.d);
   e.pdf_pos = 1.0;
   e.pdf_dir = pdf_uniform_cone(local, cos_total_);
+  e.hit.p = e.ray.o;
+  e.hit.n = e.hit.ng = e.n;
   return e;
 }
 

@@ -1,0 +1,214 @@
+#include "lib/path/path.h"
+
+#include <cmath>
+
+#include "estimators/mis_heuristics.h"
+#include "lib/geometry/spawn.h"
+#include "lib/path/measure.h"
+#include "lib/path/scattering.h"
+
+namespace tb {
+
+namespace {
+
+bool is_zero(const Vec3& v) { return v.x == 0 && v.y == 0 && v.z == 0; }
+double remap0(double p) { return p != 0.0 ? p : 1.0; }
+
+}  // namespace
+
+double to_area(double pdf_w, const PathVertex& from, const PathVertex& to) {
+  if (to.infinite) return pdf_w;                               // solid angle is the measure of a direction
+  if (to.is_light_kind() && to.delta) return 0.0;              // a point cannot be hit by chance
+  return solid_angle_to_area(pdf_w, from.hit.p, to.hit.p, to.geometric_normal());
+}
+
+double pdf_light_next(const PathVertex& x0, const PathVertex& x1) {
+  if (!x0.light) return 0.0;
+  double pos = 0, dir = 0;
+  if (x0.infinite) {
+    // The emission disk: perpendicular-area density, converted to area at x1 by its cosine.
+    x0.light->pdf_le(x0.hit, -x0.w_inf, &pos, &dir);
+    const Vec3 n1 = x1.geometric_normal();
+    return pos * (is_zero(n1) ? 1.0 : std::abs(glm::dot(n1, x0.w_inf)));
+  }
+  x0.light->pdf_le(x0.hit, direction(x0, x1), &pos, &dir);
+  if (x0.delta && (x0.light->flags() & light_flags::kDeltaDirection)) return 0.0;
+  return to_area(dir, x0, x1);
+}
+
+bool PathVertex::connectible() const {
+  switch (kind) {
+    case VertexKind::kCamera:
+      return true;
+    case VertexKind::kLight:
+      return true;  // NEE reaches any emitter, Dirac ones included
+    case VertexKind::kSurface:
+      return bsdf != nullptr && !delta;
+  }
+  return false;
+}
+
+Vec3 PathVertex::shading_normal() const {
+  if (infinite) return Vec3(0.0);
+  return hit.n;
+}
+
+Vec3 PathVertex::geometric_normal() const {
+  if (infinite) return Vec3(0.0);
+  return hit.ng;
+}
+
+Vec3 direction(const PathVertex& a, const PathVertex& b) {
+  if (b.infinite) return b.w_inf;
+  if (a.infinite) return -a.w_inf;
+  return glm::normalize(b.hit.p - a.hit.p);
+}
+
+double pdf_next(const PathContext& ctx, const PathVertex* prev, const PathVertex& cur, const PathVertex& next,
+                TransportMode mode) {
+  switch (cur.kind) {
+    case VertexKind::kCamera: {
+      const CameraPdf p = ctx.world->camera().pdf_we(Ray{cur.hit.p, direction(cur, next)});
+      return to_area(p.dir, cur, next);
+    }
+    case VertexKind::kLight:
+      return pdf_light_next(cur, next);
+    case VertexKind::kSurface:
+      break;
+  }
+  if (!prev) return pdf_light_next(cur, next);  // an emitting surface as the first vertex
+  if (!cur.bsdf || cur.delta) return 0.0;
+  const double pdf_w = SurfaceScatter(cur.hit, *cur.bsdf).pdf(direction(cur, *prev), direction(cur, next), mode);
+  return to_area(pdf_w, cur, next);
+}
+
+double pdf_light_origin(const PathContext& ctx, const PathVertex& x0) {
+  if (!x0.light) return 0.0;
+  const double pmf = ctx.lights->pmf(x0.light);
+  if (x0.light->is_delta()) return pmf;  // a Dirac mass in position or direction
+  if (x0.infinite) return pmf * x0.light->pdf_li(Vec3(0.0), x0.w_inf, nullptr);
+  double pos = 0, dir = 0;
+  x0.light->pdf_le(x0.hit, x0.hit.n, &pos, &dir);
+  return pmf * pos;
+}
+
+Rgb emitted(const PathVertex& x0, const PathVertex& x1) {
+  if (!x0.light) return Rgb(0.0);
+  if (x0.infinite && !x0.light->is_delta()) return x0.light->le(Vec3(0.0), x0.w_inf);
+  if (x0.light->is_delta()) {
+    // Intensity (point, spot) or irradiance (directional): recovered from the arrival at x1.
+    const auto li = x0.light->sample_li(x1.hit.p, Vec2(0.5));
+    if (!li) return Rgb(0.0);
+    return x0.infinite ? li->li : li->li * (li->distance * li->distance);
+  }
+  return x0.light->le(x0.hit.n, direction(x0, x1));
+}
+
+Rgb measurement_contribution(const PathContext& ctx, std::span<const PathVertex> x, bool test_visibility) {
+  const size_t k = x.size() - 1;
+  if (x.size() < 2 || x[k].kind != VertexKind::kCamera) return Rgb(0.0);
+  const Scene& scene = ctx.world->geometry();
+  Rgb f = emitted(x[0], x[1]);
+  for (size_t i = 0; i < k && !is_black(f); ++i) {
+    const PathVertex &a = x[i], &b = x[i + 1];
+    // Geometry term with shading-normal cosines; no distance to a direction.
+    double g = 1.0;
+    const Vec3 w = direction(a, b);
+    const Vec3 na = a.shading_normal(), nb = b.shading_normal();
+    if (!is_zero(na)) g *= std::abs(glm::dot(na, w));
+    if (!is_zero(nb)) g *= std::abs(glm::dot(nb, w));
+    if (!a.infinite && !b.infinite) {
+      const Vec3 d = b.hit.p - a.hit.p;
+      g /= glm::dot(d, d);
+    }
+    f *= g;
+    if (test_visibility) {
+      bool blocked;
+      if (a.infinite || b.infinite) {
+        const PathVertex& s = a.infinite ? b : a;
+        blocked = scene.occluded(spawn_ray(s.hit, a.infinite ? -w : w));
+      } else if (a.kind == VertexKind::kSurface && b.kind == VertexKind::kSurface) {
+        blocked = scene.occluded(spawn_ray_to(a.hit, b.hit));
+      } else {
+        const PathVertex& s = a.kind == VertexKind::kSurface ? a : b;
+        const PathVertex& o = a.kind == VertexKind::kSurface ? b : a;
+        blocked = scene.occluded(spawn_ray_to(s.hit, o.hit.p));
+      }
+      if (blocked) return Rgb(0.0);
+    }
+    if (i + 1 < k) {  // scattering at b, radiance form: wo towards the camera, wi towards the light
+      if (!b.bsdf || b.delta) return Rgb(0.0);
+      f *= SurfaceScatter(b.hit, *b.bsdf).f(direction(b, x[i + 2]), direction(b, a), TransportMode::kRadiance);
+    }
+  }
+  const double we = ctx.world->camera().importance(Ray{x[k].hit.p, direction(x[k], x[k - 1])});
+  return f * we;
+}
+
+PathDensities path_densities(const PathContext& ctx, std::span<const PathVertex> x) {
+  const size_t n = x.size(), k = n - 1;
+  PathDensities d;
+  d.pL.assign(n, 0.0);
+  d.pE.assign(n, 0.0);
+  d.delta.assign(n, 0);
+  d.x0_infinite = x[0].infinite;
+  for (size_t i = 0; i < n; ++i) d.delta[i] = x[i].delta ? 1 : 0;
+  d.pL[0] = pdf_light_origin(ctx, x[0]);
+  if (k >= 1 && x[1].kind != VertexKind::kCamera) d.pL[1] = pdf_light_next(x[0], x[1]);
+  for (size_t i = 2; i < k; ++i) d.pL[i] = pdf_next(ctx, &x[i - 2], x[i - 1], x[i], TransportMode::kImportance);
+  d.pE[k] = ctx.world->camera().pdf_we(Ray{x[k].hit.p, direction(x[k], x[k - 1])}).pos;
+  d.pE[k - 1] = pdf_next(ctx, nullptr, x[k], x[k - 1], TransportMode::kRadiance);
+  for (size_t i = k - 1; i-- > 0;) d.pE[i] = pdf_next(ctx, &x[i + 2], x[i + 1], x[i], TransportMode::kRadiance);
+  return d;
+}
+
+namespace {
+
+// Can technique j (light subpath x_0..x_{j-1}, camera subpath x_j..x_k) sample the path?
+bool technique_valid(const PathDensities& d, size_t j) {
+  const size_t k = d.size() - 1;
+  if (j > k) return false;                // t = 0: never used
+  if (j == 0) return d.delta[0] == 0;     // the camera path must hit the emitter by chance
+  if (j == 1 && d.x0_infinite && k == 1) return false;  // a direction cannot be joined to the lens
+  return d.delta[j] == 0 && (j == 1 || d.delta[j - 1] == 0);
+}
+
+}  // namespace
+
+void technique_ratios(const PathDensities& d, int s, std::vector<double>* q) {
+  const size_t n = d.size();
+  q->assign(n, 0.0);
+  const size_t ss = static_cast<size_t>(s);
+  double r = 1.0;
+  if (technique_valid(d, ss)) (*q)[ss] = 1.0;
+  for (size_t j = ss; j-- > 0;) {  // x_j moves from the light subpath to the camera subpath
+    r *= remap0(d.pE[j]) / remap0(d.pL[j]);
+    if (technique_valid(d, j)) (*q)[j] = r;
+  }
+  r = 1.0;
+  for (size_t j = ss + 1; j < n; ++j) {  // x_{j-1} moves from the camera subpath to the light subpath
+    r *= remap0(d.pL[j - 1]) / remap0(d.pE[j - 1]);
+    if (technique_valid(d, j)) (*q)[j] = r;
+  }
+}
+
+double technique_density(const PathDensities& d, int s) {
+  if (!technique_valid(d, static_cast<size_t>(s))) return 0.0;
+  double p = 1.0;
+  for (size_t i = 0; i < d.size(); ++i) p *= (static_cast<int>(i) < s ? d.pL[i] : d.pE[i]);
+  return p;
+}
+
+double mis_weight_from_ratios(std::span<const double> q, int s, MisKind kind) {
+  const size_t i = static_cast<size_t>(s);
+  if (q[i] == 0.0) return 0.0;
+  return kind == MisKind::kPower ? PowerHeuristic{}.weight(q, i) : BalanceHeuristic{}.weight(q, i);
+}
+
+double mis_weight(const PathDensities& d, int s, MisKind kind) {
+  std::vector<double> q;
+  technique_ratios(d, s, &q);
+  return mis_weight_from_ratios(q, s, kind);
+}
+
+}  // namespace tb

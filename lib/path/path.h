@@ -1,0 +1,127 @@
+// The one representation of a light path (ARCHITECTURE.md, lib/path): a sequence of vertices
+// x_0 ... x_k from the emitter (x_0) to the camera lens (x_k), as in Veach 1997, Ch. 8 and 10.
+// Every integrator and every later MCMC mutation builds, evaluates and weights paths with these
+// functions, so a density used to sample a path is the density used to weight it.
+//
+// Measure. A path of k segments lives in the product of the area measures of its vertices
+// (Veach 1997, Eq. 8.5). Exceptions, as in pbrt-v3 (Sec. 16.3): a vertex on an infinite light
+// (environment, directional) is a direction, measured in solid angle at its neighbour; the
+// first surface vertex after it is then sampled on the emission disk, whose perpendicular-area
+// density converts to area by the cosine at that vertex only.
+//
+// Measurement contribution (Veach 1997, Eq. 8.7, radiance form):
+//   f(X) = Le(x_0 -> x_1) G(x_0, x_1) prod_{i=1}^{k-1} f_s(x_{i-1} -> x_i -> x_{i+1}) G(x_i, x_{i+1})
+//          * We(x_k -> x_{k-1}),
+// with G(x, y) = V(x, y) |cos_x| |cos_y| / |x - y|^2. Cosines use the shading normal at a
+// surface vertex (lib/path/scattering.h), the forward axis at the lens, none at a point light.
+//
+// Densities. For technique (s, t), s + t = k + 1, the light subpath x_0 .. x_{s-1} is sampled
+// from the emitter and the camera subpath x_k .. x_s from the lens (Veach 1997, Sec. 10.2). Every
+// vertex x_i has two area densities: pL[i] when it is sampled as part of a light subpath (from
+// x_{i-1}, x_{i-2}) and pE[i] as part of a camera subpath (from x_{i+1}, x_{i+2}), so
+//   p_{s,t}(X) = prod_{i<s} pL[i] * prod_{i>=s} pE[i]                       (Veach Eq. 10.8).
+// Densities generated at a vertex that scatters by a Dirac lobe are stored as 0 and read as 1
+// in ratios; techniques that would connect through such a vertex (or reach a Dirac emitter by
+// chance) have density 0 (Veach 1997, Sec. 10.3.5; pbrt-v3 Sec. 16.3.4). The MIS weight of
+// technique s is a heuristic of estimators/mis_heuristics.h applied to q_j = p_{j,k+1-j}(X) / p_s(X).
+// The t = 0 techniques (light subpaths hitting the lens) are never used: lenses here are not
+// scene geometry.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "lib/core/spectrum.h"
+#include "lib/geometry/hit.h"
+#include "lib/material/bsdf.h"
+#include "lib/path/light_sampler.h"
+#include "lib/scene/world.h"
+
+namespace tb {
+
+enum class VertexKind : uint8_t { kCamera, kLight, kSurface };
+
+struct PathVertex {
+  VertexKind kind = VertexKind::kSurface;
+  // Surface: the intersection. Light: the emitter point (full geometry for area lights; p only
+  // for point lights, zero normals; unused for infinite lights). Camera: p = lens point,
+  // n = ng = the camera's forward axis (the cos theta of the importance, docs/camera.md).
+  Hit hit;
+  const Bsdf* bsdf = nullptr;    // surface vertices that scatter
+  const Light* light = nullptr;  // the emitter at this vertex (kLight, or an emitting surface)
+  bool delta = false;            // scatters by a Dirac lobe (surface) / is a Dirac emitter position
+  bool infinite = false;         // on an infinite light: a direction, see w_inf
+  Vec3 w_inf{0.0};               // infinite light: unit direction from the scene towards the light
+  Rgb beta{1.0};                 // sampling weight of the subpath up to this vertex
+  double pdf_fwd = 0.0;          // area density in the direction the subpath was sampled
+  double pdf_rev = 0.0;          // area density if sampled from the other end
+
+  bool is_surface() const { return kind == VertexKind::kSurface; }
+  bool is_light_kind() const { return kind == VertexKind::kLight; }
+  // Can this vertex be joined to another by a deterministic connection (not a Dirac scatterer)?
+  bool connectible() const;
+  // A normal for cosines (zero: no cosine): shading normal on surfaces and area lights.
+  Vec3 shading_normal() const;
+  Vec3 geometric_normal() const;
+};
+
+// Unit direction from vertex a towards vertex b (handles infinite vertices).
+Vec3 direction(const PathVertex& a, const PathVertex& b);
+
+// Environment for path evaluation: the world and the light-selection distribution.
+struct PathContext {
+  const World* world = nullptr;
+  const LightSampler* lights = nullptr;
+};
+
+// --- Vertex-level densities (area measure, or solid angle for infinite vertices) ---------------
+
+// Density of sampling `next` from `cur`, the path having reached `cur` from `prev` (null at a
+// subpath's first vertex). mode: kRadiance when walking from the camera, kImportance from the
+// light. Camera: Camera::pdf_we direction; light: emission direction (or emission disk); surface:
+// the BSDF density (0 for Dirac vertices).
+double pdf_next(const PathContext& ctx, const PathVertex* prev, const PathVertex& cur, const PathVertex& next,
+                TransportMode mode);
+// Area density at `to` of a direction density pdf_w (solid angle) at `from`: pdf_w itself when
+// `to` is a direction (infinite light), 0 when `to` is a point light.
+double to_area(double pdf_w, const PathVertex& from, const PathVertex& to);
+// Density of x_1 when emitted from x_0 (a light vertex or an emitting surface): the emission
+// direction density in area measure, or the emission disk's density for infinite lights.
+double pdf_light_next(const PathVertex& x0, const PathVertex& x1);
+// Density of the emitter vertex x_0 when sampled by the light sampler: pmf(light) times the
+// position density (area lights: area; point lights: 1; infinite lights: solid angle of w_inf).
+double pdf_light_origin(const PathContext& ctx, const PathVertex& x0);
+// Emitted radiance leaving x_0 towards x_1.
+Rgb emitted(const PathVertex& x0, const PathVertex& x1);
+
+// --- Whole-path evaluation (for paths given, not only sampled) ---------------------------------
+
+// f(X) for X = x_0 .. x_k (x_0 a light vertex or an emitting surface, x_k the camera).
+// test_visibility: trace shadow rays for every segment (MCMC proposals); the integrators'
+// sampled segments are visible by construction. The camera factor is the importance with the
+// whole-image normalisation of docs/camera.md.
+Rgb measurement_contribution(const PathContext& ctx, std::span<const PathVertex> x, bool test_visibility);
+
+struct PathDensities {
+  std::vector<double> pL, pE;  // per vertex, see the top of this file
+  std::vector<uint8_t> delta;  // Dirac scatterer / emitter flags per vertex
+  bool x0_infinite = false;    // x_0 is a direction (infinite light)
+  size_t size() const { return pL.size(); }
+};
+// pL and pE of every vertex of X, evaluated from scratch.
+PathDensities path_densities(const PathContext& ctx, std::span<const PathVertex> x);
+// p_{s,t}(X), t = k + 1 - s; 0 for a technique that cannot sample X (t >= 1).
+double technique_density(const PathDensities& d, int s);
+// q_j / q_s for j = 0..k (0 where technique j cannot sample X); q_t=0 excluded.
+void technique_ratios(const PathDensities& d, int s, std::vector<double>* q);
+
+enum class MisKind { kBalance, kPower };
+// MIS weight of technique s for X from its densities: BalanceHeuristic / PowerHeuristic (beta = 2)
+// of estimators/mis_heuristics.h over the ratios q_j.
+double mis_weight(const PathDensities& d, int s, MisKind kind);
+// The same from ratios already computed (technique_ratios).
+double mis_weight_from_ratios(std::span<const double> q, int s, MisKind kind);
+
+}  // namespace tb

@@ -1,0 +1,57 @@
+#include "lib/path/scattering.h"
+
+#include <cmath>
+
+namespace tb {
+
+Frame SurfaceScatter::frame_for(const Vec3& wo) const {
+  const bool transmissive = (bsdf_->flags() & bsdf_flags::kTransmission) != 0;
+  if (!transmissive && glm::dot(wo, hit_->ng) < 0) return Frame::from_z(-hit_->n);
+  return Frame::from_z(hit_->n);
+}
+
+bool SurfaceScatter::sides_ok(const Vec3& wo, const Vec3& wi) const {
+  if (bsdf_->flags() & bsdf_flags::kTransmission) return true;
+  return glm::dot(wo, hit_->ng) * glm::dot(wi, hit_->ng) > 0;
+}
+
+double SurfaceScatter::correction(const Vec3& wo, const Vec3& wi, TransportMode mode) const {
+  if (mode != TransportMode::kImportance) return 1.0;
+  const double num = std::abs(glm::dot(wo, hit_->ng)) * std::abs(glm::dot(wi, hit_->n));
+  const double den = std::abs(glm::dot(wo, hit_->n)) * std::abs(glm::dot(wi, hit_->ng));
+  if (num == den) return 1.0;  // n == ng: exactly 1, no rounding
+  return den > 0 ? num / den : 0.0;
+}
+
+Rgb SurfaceScatter::f(const Vec3& wo, const Vec3& wi, TransportMode mode) const {
+  if (!sides_ok(wo, wi)) return Rgb(0.0);
+  const Frame fr = frame_for(wo);
+  return bsdf_->eval(fr.to_local(wo), fr.to_local(wi), mode) * correction(wo, wi, mode);
+}
+
+double SurfaceScatter::pdf(const Vec3& wo, const Vec3& wi, TransportMode mode) const {
+  const Frame fr = frame_for(wo);
+  return bsdf_->pdf(fr.to_local(wo), fr.to_local(wi), mode);
+}
+
+std::optional<WorldBsdfSample> SurfaceScatter::sample(const Vec3& wo, double uc, const Vec2& u,
+                                                      TransportMode mode) const {
+  const Frame fr = frame_for(wo);
+  const auto bs = bsdf_->sample(fr.to_local(wo), uc, u, mode);
+  if (!bs || !(bs->pdf > 0)) return std::nullopt;
+  WorldBsdfSample s;
+  s.wi = glm::normalize(fr.to_world(bs->wi));
+  s.pdf = bs->pdf;
+  s.flags = bs->flags;
+  if (!sides_ok(wo, s.wi)) {
+    s.f = Rgb(0.0);
+    s.weight = Rgb(0.0);
+    return s;
+  }
+  const double c = correction(wo, s.wi, mode);
+  s.f = bs->f * c;
+  s.weight = bs->weight * c;  // bs->weight = f |cos wi| / pdf with the (possibly flipped) shading normal
+  return s;
+}
+
+}  // namespace tb

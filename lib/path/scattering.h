@@ -1,0 +1,52 @@
+// Scattering at a surface vertex in world space, shared by every integrator and mutation so
+// that all of them evaluate the same f and the same densities:
+//  - two-sided shading for BSDFs without transmission: the shading frame is flipped to the side
+//    of the geometric normal that `wo` lies on; f is zero unless wi lies on that side of the
+//    geometric normal too (no light leaks through shading normals);
+//  - the shading-normal correction of the adjoint BSDF for importance transport (Veach 1997,
+//    Sec. 5.3, Eq. 5.19): f_imp is multiplied by |wo.ng| |wi.n| / (|wo.n| |wi.ng|), so that light
+//    tracing estimates the same measurement as path tracing when n != ng;
+//  - cosines: a contribution uses |wi.n| (shading normal) for the projected solid angle at a
+//    surface vertex; density conversions to area use the geometric normal (measure.h).
+// Directions: wo is where the path came from, wi where it goes, both unit and pointing away.
+#pragma once
+
+#include <optional>
+
+#include "lib/core/frame.h"
+#include "lib/geometry/hit.h"
+#include "lib/material/bsdf.h"
+
+namespace tb {
+
+struct WorldBsdfSample {
+  Vec3 wi{0.0};
+  Rgb f{0.0};       // corrected BSDF value (delta lobes: coefficient / |cos|, as BsdfSample::f)
+  Rgb weight{0.0};  // f |wi.n| / pdf
+  double pdf = 0.0; // solid angle (delta lobes: discrete lobe probability)
+  uint32_t flags = 0;
+  bool is_delta() const { return (flags & bsdf_flags::kDelta) != 0; }
+};
+
+class SurfaceScatter {
+ public:
+  SurfaceScatter(const Hit& hit, const Bsdf& bsdf) : hit_(&hit), bsdf_(&bsdf) {}
+
+  Rgb f(const Vec3& wo, const Vec3& wi, TransportMode mode) const;
+  double pdf(const Vec3& wo, const Vec3& wi, TransportMode mode) const;
+  std::optional<WorldBsdfSample> sample(const Vec3& wo, double uc, const Vec2& u, TransportMode mode) const;
+
+  // |w . n| with the shading normal.
+  double abs_cos_shading(const Vec3& w) const { return std::abs(glm::dot(w, hit_->n)); }
+  const Bsdf& bsdf() const { return *bsdf_; }
+  const Hit& hit() const { return *hit_; }
+
+ private:
+  Frame frame_for(const Vec3& wo) const;
+  double correction(const Vec3& wo, const Vec3& wi, TransportMode mode) const;
+  bool sides_ok(const Vec3& wo, const Vec3& wi) const;
+  const Hit* hit_;
+  const Bsdf* bsdf_;
+};
+
+}  // namespace tb
