@@ -24,7 +24,7 @@ double abs_cos(const Vec3& n, const Vec3& w) {
 // its forward area density, and for the vertex two steps back its reverse one, are evaluated
 // with pdf_next() on the vertex positions (not the sampled ray directions, which differ by the
 // spawn offsets), so they equal what path_densities() computes for the finished path.
-void random_walk(const PathContext& ctx, Rng& rng, Ray ray, Rgb beta, size_t max_vertices, TransportMode mode,
+void random_walk(const PathContext& ctx, Uniforms& rng, Ray ray, Rgb beta, size_t max_vertices, TransportMode mode,
                  std::vector<PathVertex>* path) {
   const World& world = *ctx.world;
   auto link = [&](PathVertex& v) {  // densities of the vertex just found, before it is pushed
@@ -63,8 +63,8 @@ void random_walk(const PathContext& ctx, Rng& rng, Ray ray, Rgb beta, size_t max
     PathVertex& cur = path->back();
     const SurfaceScatter sc(cur.hit, *cur.bsdf);
     const Vec3 wo = -glm::normalize(ray.d);
-    const double uc = rng.uniform();
-    const Vec2 u = rng.uniform2();
+    const double uc = rng.next();
+    const Vec2 u = rng.next2();
     const auto bs = sc.sample(wo, uc, u, mode);
     if (!bs || is_black(bs->weight)) return;
     cur.delta = bs->is_delta();
@@ -139,7 +139,7 @@ double connection_weight(const PathContext& ctx, std::span<const PathVertex> lig
 
 }  // namespace
 
-int generate_camera_subpath(const PathContext& ctx, const Vec2& raster, const Vec2& lens_u, Rng& rng,
+int generate_camera_subpath(const PathContext& ctx, const Vec2& raster, const Vec2& lens_u, Uniforms& rng,
                             int max_vertices, std::vector<PathVertex>* path) {
   path->clear();
   if (max_vertices < 1) return 0;
@@ -159,11 +159,11 @@ int generate_camera_subpath(const PathContext& ctx, const Vec2& raster, const Ve
   return static_cast<int>(path->size());
 }
 
-int generate_light_subpath(const PathContext& ctx, Rng& rng, int max_vertices, std::vector<PathVertex>* path) {
+int generate_light_subpath(const PathContext& ctx, Uniforms& rng, int max_vertices, std::vector<PathVertex>* path) {
   path->clear();
   if (max_vertices < 1) return 0;
-  const auto choice = ctx.lights->sample(rng.uniform());
-  const Vec2 u_pos = rng.uniform2(), u_dir = rng.uniform2();
+  const auto choice = ctx.lights->sample(rng.next());
+  const Vec2 u_pos = rng.next2(), u_dir = rng.next2();
   if (!choice) return 0;
   const Light& light = *choice->light;
   const auto e = light.sample_le(u_pos, u_dir);
@@ -187,7 +187,7 @@ int generate_light_subpath(const PathContext& ctx, Rng& rng, int max_vertices, s
 }
 
 Connection connect_bdpt(const PathContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
-                        int s, int t, Rng& rng, IntegratorFault fault) {
+                        int s, int t, Uniforms& rng, IntegratorFault fault) {
   Connection c;
   if (t < 1 || s < 0 || s > static_cast<int>(light.size()) || t > static_cast<int>(camera.size())) return c;
   const World& world = *ctx.world;
@@ -219,7 +219,7 @@ Connection connect_bdpt(const PathContext& ctx, std::span<const PathVertex> ligh
   if (t == 1) {
     if (!ls.connectible() || ls.infinite) return c;
     const Camera& cam = world.camera();
-    const auto cs = cam.sample_wi(ls.hit.p, rng.uniform2());
+    const auto cs = cam.sample_wi(ls.hit.p, rng.next2());
     if (!cs || !(cs->pdf > 0) || !(cs->importance > 0)) return c;
     PathVertex xk;
     xk.kind = VertexKind::kCamera;
@@ -245,8 +245,8 @@ Connection connect_bdpt(const PathContext& ctx, std::span<const PathVertex> ligh
   }
   if (!ct.connectible() || ct.kind != VertexKind::kSurface) return c;
   if (s == 1) {  // next-event estimation: a fresh emitter vertex from Light::sample_li
-    const auto choice = ctx.lights->sample(rng.uniform());
-    const Vec2 u = rng.uniform2();
+    const auto choice = ctx.lights->sample(rng.next());
+    const Vec2 u = rng.next2();
     if (!choice) return c;
     const auto li = choice->light->sample_li(ct.hit.p, u);
     if (!li || !(li->pdf > 0) || is_black(li->li)) return c;
@@ -325,9 +325,10 @@ int64_t render_bdpt(const World& world, const RenderSettings& st, Film& film) {
             const uint64_t pixel = static_cast<uint64_t>(y) * static_cast<uint64_t>(film.width()) + static_cast<uint64_t>(x);
             for (int64_t si = 0; si < spp_pass; ++si) {
               const uint64_t index = static_cast<uint64_t>(pass * spp_pass + si);
-              Rng rng = Rng::for_sample(st.seed, pixel, index);
-              const Vec2 film_u = rng.uniform2();
-              const Vec2 lens_u = rng.uniform2();
+              Rng stream = Rng::for_sample(st.seed, pixel, index);
+              RngUniforms rng(stream);
+              const Vec2 film_u = rng.next2();
+              const Vec2 lens_u = rng.next2();
               const Vec2 raster(x + film_u.x, y + film_u.y);
               const int nc = generate_camera_subpath(ctx, raster, lens_u, rng, max_cam, &cam_path);
               const int nl = generate_light_subpath(ctx, rng, max_light, &light_path);

@@ -14,7 +14,7 @@
 #include <span>
 #include <vector>
 
-#include "lib/core/rng.h"
+#include "lib/core/uniforms.h"
 #include "lib/film/film.h"
 #include "lib/integrator/render_settings.h"
 #include "lib/path/path.h"
@@ -24,11 +24,12 @@ namespace tb {
 
 int64_t render_bdpt(const World& world, const RenderSettings& settings, Film& film);
 
-// One subpath (exposed for tests and for PSSMLT over BDPT in a later issue).
+// One subpath (exposed for tests and for PSSMLT / MMLT over BDPT). Random numbers come from a
+// Uniforms source (an RNG stream, or a primary-sample-space state of an MCMC chain).
 // Camera subpath starting with the camera ray through `raster`; at most max_vertices vertices.
-int generate_camera_subpath(const PathContext& ctx, const Vec2& raster, const Vec2& lens_u, Rng& rng,
+int generate_camera_subpath(const PathContext& ctx, const Vec2& raster, const Vec2& lens_u, Uniforms& u,
                             int max_vertices, std::vector<PathVertex>* path);
-int generate_light_subpath(const PathContext& ctx, Rng& rng, int max_vertices, std::vector<PathVertex>* path);
+int generate_light_subpath(const PathContext& ctx, Uniforms& u, int max_vertices, std::vector<PathVertex>* path);
 
 // The weighted contribution of technique (s, t) from two subpaths, and for t = 1 the raster
 // position to splat to. Returns zero when the connection fails.
@@ -42,6 +43,6 @@ struct Connection {
   PathVertex sampled;
 };
 Connection connect_bdpt(const PathContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
-                        int s, int t, Rng& rng, IntegratorFault fault = IntegratorFault::kNone);
+                        int s, int t, Uniforms& u, IntegratorFault fault = IntegratorFault::kNone);
 
 }  // namespace tb

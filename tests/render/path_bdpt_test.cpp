@@ -49,9 +49,10 @@ void check_scene(const std::string& name, int max_depth, bool expect_deltas) {
   double worst_w = 0, worst_f = 0, worst_sum = 0;
   std::string where_w, where_f;
   for (uint64_t i = 0; i < 1500; ++i) {
-    Rng rng = Rng::for_sample(7, 99, i);
-    const Vec2 raster(rng.uniform() * 32, rng.uniform() * 32);
-    const Vec2 lens_u = rng.uniform2();
+    Rng stream = Rng::for_sample(7, 99, i);
+    RngUniforms rng(stream);
+    const Vec2 raster(rng.next() * 32, rng.next() * 32);
+    const Vec2 lens_u = rng.next2();
     const int nc = generate_camera_subpath(ctx, raster, lens_u, rng, max_depth + 2, &cam);
     const int nl = generate_light_subpath(ctx, rng, max_depth + 1, &light);
     for (int t = 1; t <= nc; ++t)
@@ -111,7 +112,8 @@ TEST(PathBdpt, MissingDensityBreaksTheWeightSum) {
   std::vector<PathVertex> cam, light;
   double worst = 0;
   for (uint64_t i = 0; i < 100; ++i) {
-    Rng rng = Rng::for_sample(8, 99, i);
+    Rng stream = Rng::for_sample(8, 99, i);
+    RngUniforms rng(stream);
     const int nc = generate_camera_subpath(ctx, Vec2(16.5, 16.5), Vec2(0.5), rng, 6, &cam);
     const int nl = generate_light_subpath(ctx, rng, 5, &light);
     for (int t = 2; t <= nc; ++t)
