@@ -1,7 +1,9 @@
 #include "app/cmd_render.h"
 
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
+#include <stdexcept>
 
 #include <fmt/format.h>
 #include <unistd.h>
@@ -16,6 +18,31 @@
 
 namespace tb {
 
+namespace {
+
+// "WxH" -> (W, H); throws std::invalid_argument on anything else.
+std::pair<int, int> parse_resolution(const std::string& s) {
+  int w = 0, h = 0;
+  char x = 0, extra = 0;
+  if (std::sscanf(s.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w <= 0 || h <= 0)
+    throw std::invalid_argument("--resolution '" + s + "': expected WxH with positive integers, e.g. 512x512");
+  return {w, h};
+}
+
+// The scene file, with the camera resolution replaced when --resolution is given.
+std::unique_ptr<World> load_scene(const RenderArgs& a) {
+  if (a.resolution.empty()) return load_world(a.scene);
+  const auto [w, h] = parse_resolution(a.resolution);
+  nlohmann::json j = nlohmann::json::parse(read_file(a.scene));
+  if (!j.is_object() || !j.contains("camera") || !j["camera"].is_object())
+    throw std::invalid_argument(a.scene + ": no camera object to set the resolution of");
+  j["camera"]["resolution"] = {w, h};
+  const std::filesystem::path parent = std::filesystem::path(a.scene).parent_path();
+  return load_world_from_string(j.dump(1), a.scene, parent.empty() ? "." : parent.string());
+}
+
+}  // namespace
+
 int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   if (a.list) {
     for (const auto& i : integrators()) fmt::print("{:<12} {}\n", i.name, i.description);
@@ -29,7 +56,7 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     return 2;
   }
   const auto t_load = std::chrono::steady_clock::now();
-  std::unique_ptr<World> world = load_world(a.scene);
+  std::unique_ptr<World> world = load_scene(a);
   const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count();
 
   RenderSettings st;
@@ -42,7 +69,13 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   if (a.time_s > 0) st.passes = std::max<int64_t>(st.passes, 1 << 20);  // passes until the budget runs out
   ProgressLine line(!a.no_progress && isatty(STDERR_FILENO));
   line.start(fmt::format("{} {}", a.integrator, std::filesystem::path(a.scene).filename().string()));
-  st.progress = [&](double f) { line.update(f); };
+  const auto t_start = std::chrono::steady_clock::now();
+  st.progress = [&](double f) {
+    // With a time budget the pass count is open-ended: show the fraction of the budget used.
+    if (a.time_s > 0)
+      f = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count() / a.time_s;
+    line.update(f);
+  };
 
   ThreadLimit limit(static_cast<size_t>(std::max(0, a.threads)));
   Film film(world->camera().width(), world->camera().height());
@@ -60,6 +93,8 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
                         {"integrator", a.integrator},
                         {"seed", a.seed},
                         {"passes", passes},
+                        {"max_depth", st.max_depth},
+                        {"resolution", {film.width(), film.height()}},
                         {"spp", spp_done},
                         {"seconds", seconds},
                         {"load_seconds", load_s},

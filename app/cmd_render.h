@@ -17,6 +17,7 @@ struct RenderArgs {
   uint64_t seed = 1;
   int threads = 0;
   std::string out = "out.exr";
+  std::string resolution;   // "WxH": overrides the camera resolution of the scene file
   bool no_progress = false;
   bool list = false;
 };

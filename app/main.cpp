@@ -1,5 +1,6 @@
 // tb: the test bench program. Subcommands: check (validation suite), reproduce (a paper's
-// canonical experiment), report (regenerate an HTML report from its JSON).
+// canonical experiment), report (regenerate an HTML report from its JSON), render (a scene to
+// OpenEXR), compare (statistical comparison of renders).
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -11,6 +12,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include "app/cmd_compare.h"
 #include "app/cmd_render.h"
 #include "app/progress.h"
 #include "lib/core/atomic_file.h"
@@ -188,8 +190,16 @@ int main(int argc, char** argv) {
   render->add_option("--seed", rargs.seed, "Seed");
   render->add_option("--threads", rargs.threads, "Worker threads (0: all cores)");
   render->add_option("-o,--out", rargs.out, "Output EXR path")->capture_default_str();
+  render->add_option("--resolution", rargs.resolution, "WxH: override the scene camera's resolution");
   render->add_flag("--list", rargs.list, "List the integrators and exit");
   render->add_flag("--no-progress", rargs.no_progress, "No progress line on stderr");
+
+  tb::CompareArgs cmpa;
+  auto* compare = app.add_subcommand(
+      "compare", "Compare two renders statistically (per-pixel Welch t-test, Stouffer, sum z^2); exit 1 if they differ");
+  compare->add_option("inputs", cmpa.inputs, "A.exr B.exr (EXRs written by tb render)")->required();
+  compare->add_option("--alpha", cmpa.alpha, "Significance level of the whole comparison")->capture_default_str();
+  compare->add_option("--json", cmpa.json_out, "Write the full result to this JSON file");
 
   std::string report_json, report_out;
   auto* report = app.add_subcommand("report", "Regenerate an HTML report from results.json or report.json");
@@ -210,6 +220,7 @@ int main(int argc, char** argv) {
       return tb::cmd_render(rargs, &g_interrupted);
     }
     if (*report) return cmd_report(report_json, report_out);
+    if (*compare) return tb::cmd_compare(cmpa);
   } catch (const std::exception& e) {
     fmt::print(stderr, "tb: error: {}\n", e.what());
     return 2;

@@ -51,6 +51,12 @@ class Scene {
   AreaSample sample_area(uint32_t shape_id, const Vec2& u) const;
   double pdf_area(const Hit& h) const;
 
+  // The committed RTCScene (as void*, so that this header needs no Embree include), for
+  // benchmarks that measure raw Embree throughput next to Scene queries. Raw rtcIntersect1 /
+  // rtcOccluded1 calls are valid only on scenes of triangle meshes: the callbacks of analytic
+  // shapes expect the extended context that intersect() / occluded() pass.
+  void* embree_scene() const { return scene_; }
+
   struct Entry;
 
  private:

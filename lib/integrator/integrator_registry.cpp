@@ -3,6 +3,11 @@
 #include <algorithm>
 
 #include "lib/integrator/albedo_integrator.h"
+#include "lib/integrator/bdpt.h"
+#include "lib/integrator/light_tracer.h"
+#include "lib/integrator/path_tracer.h"
+#include "lib/mcmc/path_space/mlt.h"
+#include "lib/mcmc/pss/pss_driver.h"
 
 namespace tb {
 
@@ -13,6 +18,20 @@ const std::vector<IntegratorInfo>& integrators() {
     std::vector<IntegratorInfo> t = {
         {"albedo", "primary-hit albedo (emitted radiance on emitters, directional albedo by one BSDF sample)",
          render_albedo},
+        {"bdpt", "bidirectional path tracing: all (s, t) connections, power-heuristic MIS over the shared path densities",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_bdpt(w, s, f); }},
+        {"lt", "light tracing: emitter paths connected to the camera and splatted (importance transport)",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_lt(w, s, f); }},
+        {"mlt", "Veach's path-space MLT: bidirectional mutation, lens and caustic perturbations (pinhole; no Dirac vertices)",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_mlt(w, s, f); }},
+        {"mmlt", "multiplexed MLT (Hachisuka et al. 2014): primary-sample-space chains per path length over single BDPT techniques",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_mmlt(w, s, f); }},
+        {"pssmlt", "primary sample space MLT (Kelemen et al. 2002) over BDPT: large and small steps, expected-value splats",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_pssmlt(w, s, f); }},
+        {"pssmlt-pt", "primary sample space MLT (Kelemen et al. 2002) over the path tracer (one NEE+MIS radiance sample per state)",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_pssmlt_pt(w, s, f); }},
+        {"pt", "path tracing with next-event estimation, MIS (power heuristic) and Russian roulette",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_pt(w, s, f); }},
     };
     std::sort(t.begin(), t.end(), [](const auto& a, const auto& b) { return a.name < b.name; });
     return t;

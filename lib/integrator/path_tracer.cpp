@@ -1,0 +1,192 @@
+#include "lib/integrator/path_tracer.h"
+
+#include <array>
+#include <atomic>
+#include <chrono>
+
+#include "estimators/mis_heuristics.h"
+#include "lib/core/rng.h"
+#include "lib/core/uniforms.h"
+#include "lib/core/sample_dims.h"
+#include "lib/film/film_parallel.h"
+#include "lib/geometry/spawn.h"
+#include "lib/path/light_sampler.h"
+#include "lib/path/scattering.h"
+
+namespace tb {
+
+namespace {
+
+// The power heuristic with beta = 2 (Veach Eq. 9.13) for the two techniques at a vertex, both
+// densities in solid angle at the vertex. A constant object so that pow(x, 2) folds to x * x.
+constexpr PowerHeuristic kMis{};
+
+double mis2(double p_this, double p_other) {
+  const std::array<double, 2> q{p_this, p_other};
+  return kMis.weight(q, 0);
+}
+
+struct BounceUniforms {
+  std::array<double, kDimsPerBounce> u;
+  explicit BounceUniforms(Uniforms& src) {
+    for (double& v : u) v = src.next();
+  }
+  double operator[](BounceDim d) const { return u[static_cast<size_t>(d)]; }
+};
+
+class PathTracer {
+ public:
+  PathTracer(const World& world, const RenderSettings& st, const LightSampler& lights)
+      : world_(world), st_(st), lights_(lights) {}
+
+  // Radiance arriving along the camera ray (Veach Eq. 3.7 estimated by the path integral,
+  // pbrt-v3 PathIntegrator::Li).
+  Rgb li(Ray ray, Uniforms& rng, RayCounts& counts) const {
+    const Scene& scene = world_.geometry();
+    Rgb L(0.0), beta(1.0);
+    bool count_emission_fully = true;  // camera ray, or the last bounce was a delta lobe
+    double prev_pdf_bsdf = 0.0;        // solid angle, of the last BSDF sample
+    Vec3 prev_p(0.0);                  // the vertex the ray left
+    for (int depth = 0;; ++depth) {
+      ++counts.extension;
+      const std::optional<Hit> hit = scene.intersect(ray);
+      if (!hit) {
+        for (const Light* env : world_.infinite_lights()) {
+          const Rgb le = env->le(Vec3(0.0), ray.d);
+          if (is_black(le)) continue;
+          L += beta * le * emission_weight(count_emission_fully, prev_pdf_bsdf, env, prev_p, ray.d, nullptr);
+        }
+        break;
+      }
+      const SurfaceInfo& surf = world_.surface(hit->shape_id);
+      const Vec3 wo = -ray.d;
+      if (surf.emitter) {
+        const Rgb le = surf.emitter->le(hit->n, wo);
+        if (!is_black(le))
+          L += beta * le * emission_weight(count_emission_fully, prev_pdf_bsdf, surf.emitter, prev_p, ray.d, &*hit);
+      }
+      if (!surf.bsdf || depth >= st_.max_depth) break;
+      const SurfaceScatter scatter(*hit, *surf.bsdf);
+      const BounceUniforms u(rng);
+
+      // Next-event estimation (Veach Eq. 9.12 with the light technique's weight).
+      if (surf.bsdf->flags() & (bsdf_flags::kDiffuse | bsdf_flags::kGlossy)) L += beta * direct(scatter, wo, u, counts);
+
+      // BSDF sampling: extends the path and, when it hits an emitter, is the second technique.
+      const auto bs = scatter.sample(wo, u[BounceDim::kBsdfLobe], {u[BounceDim::kBsdfU], u[BounceDim::kBsdfV]},
+                                     TransportMode::kRadiance);
+      if (!bs || is_black(bs->weight)) break;
+      beta *= bs->weight;
+      count_emission_fully = bs->is_delta();
+      prev_pdf_bsdf = bs->pdf;
+      prev_p = hit->p;
+      ray = spawn_ray(*hit, bs->wi);
+
+      if (st_.russian_roulette && depth + 1 >= st_.rr_min_depth) {
+        const double q = std::min(1.0, max_component(beta));
+        if (!(u[BounceDim::kRussianRoulette] < q)) break;
+        if (st_.fault != IntegratorFault::kRouletteNoInverse) beta /= q;
+      }
+    }
+    return L;
+  }
+
+ private:
+  // MIS weight of emission found by BSDF sampling (or by the camera ray): the light technique
+  // would have sampled the same direction with density pmf * pdf_li (solid angle at prev_p).
+  double emission_weight(bool fully, double pdf_bsdf, const Light* light, const Vec3& prev_p, const Vec3& wi,
+                         const Hit* on_light) const {
+    if (fully) return 1.0;
+    if (st_.fault == IntegratorFault::kMisMissingDensity) return 1.0;  // light density left out
+    const double pdf_light = lights_.pmf(light) * light->pdf_li(prev_p, wi, on_light);
+    return mis2(pdf_bsdf, pdf_light);
+  }
+
+  // Light sample: f L |cos| / (pmf pdf_li), weighted against the BSDF technique.
+  Rgb direct(const SurfaceScatter& scatter, const Vec3& wo, const BounceUniforms& u, RayCounts& counts) const {
+    const auto choice = lights_.sample(u[BounceDim::kLightSelect]);
+    if (!choice) return Rgb(0.0);
+    const Hit& hit = scatter.hit();
+    const auto ls = choice->light->sample_li(hit.p, {u[BounceDim::kLightU], u[BounceDim::kLightV]});
+    if (!ls || !(ls->pdf > 0) || is_black(ls->li)) return Rgb(0.0);
+    const Rgb f = scatter.f(wo, ls->wi, TransportMode::kRadiance);
+    if (is_black(f)) return Rgb(0.0);
+    const double cos_i = st_.fault == IntegratorFault::kNeeNoCosine ? 1.0 : scatter.abs_cos_shading(ls->wi);
+    ++counts.shadow;
+    const bool blocked = std::isinf(ls->distance) ? world_.geometry().occluded(spawn_ray(hit, ls->wi))
+                                                  : world_.geometry().occluded(spawn_ray_to(hit, ls->p_light));
+    if (blocked) return Rgb(0.0);
+    const double pdf_light = choice->pmf * ls->pdf;
+    const double w = choice->light->is_delta()
+                         ? 1.0
+                         : mis2(pdf_light, scatter.pdf(wo, ls->wi, TransportMode::kRadiance));
+    return f * ls->li * (cos_i * w / pdf_light);
+  }
+
+  const World& world_;
+  const RenderSettings& st_;
+  const LightSampler& lights_;
+};
+
+}  // namespace
+
+Rgb pt_sample(const PathContext& ctx, const RenderSettings& st, const Vec2& raster, Uniforms& u) {
+  const PathTracer pt(*ctx.world, st, *ctx.lights);
+  const Vec2 lens_u = u.next2();  // CameraDim::kLensU, kLensV
+  const CameraRay cr = ctx.world->camera().generate_ray(raster, lens_u);
+  if (!(cr.weight > 0)) return Rgb(0.0);
+  RayCounts rc;
+  return cr.weight * pt.li(cr.ray, u, rc);
+}
+
+int64_t render_pt(const World& world, const RenderSettings& st, Film& film) {
+  return render_pt(world, st, film, nullptr);
+}
+
+int64_t render_pt(const World& world, const RenderSettings& st, Film& film, RayCounts* counts) {
+  const LightSampler lights(world);
+  const PathTracer pt(world, st, lights);
+  const Camera& cam = world.camera();
+  const int64_t passes = std::max<int64_t>(1, st.passes);
+  const int64_t spp_pass = std::max<int64_t>(1, st.spp / passes);
+  const auto t0 = std::chrono::steady_clock::now();
+  std::atomic<int64_t> n_ext{0}, n_shadow{0};
+  int64_t done = 0;
+  for (int64_t pass = 0; pass < passes; ++pass) {
+    if (st.interrupted && st.interrupted->load()) break;
+    for_each_film_tile(film, 16, [&](FilmTile& tile) {
+      RayCounts rc;
+      const PixelBounds& pb = tile.pixels();
+      for (int y = pb.y0; y < pb.y1; ++y)
+        for (int x = pb.x0; x < pb.x1; ++x) {
+          const uint64_t pixel = static_cast<uint64_t>(y) * static_cast<uint64_t>(film.width()) + static_cast<uint64_t>(x);
+          for (int64_t s = 0; s < spp_pass; ++s) {
+            const uint64_t index = static_cast<uint64_t>(pass * spp_pass + s);
+            Rng stream = Rng::for_sample(st.seed, pixel, index);
+            RngUniforms rng(stream);
+            const Vec2 film_u = rng.next2();  // CameraDim::kFilmX, kFilmY
+            const Vec2 lens_u = rng.next2();  // CameraDim::kLensU, kLensV
+            const Vec2 raster(x + film_u.x, y + film_u.y);
+            const CameraRay cr = cam.generate_ray(raster, lens_u);
+            const Rgb v = cr.weight > 0 ? cr.weight * pt.li(cr.ray, rng, rc) : Rgb(0.0);
+            tile.add_sample(raster, v, index);
+          }
+        }
+      n_ext.fetch_add(rc.extension, std::memory_order_relaxed);
+      n_shadow.fetch_add(rc.shadow, std::memory_order_relaxed);
+    });
+    film.end_pass();
+    ++done;
+    st.progress(static_cast<double>(done) / static_cast<double>(passes));
+    if (st.time_budget_s > 0 &&
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > st.time_budget_s)
+      break;
+  }
+  if (counts) {
+    counts->extension += n_ext.load();
+    counts->shadow += n_shadow.load();
+  }
+  return done;
+}
+
+}  // namespace tb
