@@ -1,0 +1,110 @@
+// Primary-sample-space Metropolis light transport: the chain driver, generic over a sample
+// function (pss_sample.h), and the two registered renderers built on it:
+//   pssmlt  Kelemen et al. 2002 over BDPT (target: luminance of all weighted connections of one
+//           camera + light subpath pair);
+//   mmlt    Hachisuka, Kaplanyan & Dachsbacher 2014 (one chain set per path length, one
+//           technique per sample, chosen by a uniform of the state).
+//
+// One film pass = one independent group of chains (a Welch sample, VALIDATION.md A):
+//   1. bootstrap: M independent samples u_j per level (fresh uniforms), I_j = I(level, u_j);
+//      b_l = mean of I over level l (Kelemen 2002, Sec. 5.2: b = E[I(u)]), b = sum_l b_l;
+//   2. chains start at bootstrap samples drawn with probability I_j / sum I (sampling-importance
+//      resampling; with b from the same samples the estimate is exactly unbiased, docs/mlt-pss.md).
+//      PSSMLT: one group of C chains. MMLT: one chain set per level (path length), its share of the
+//      mutations N_l fixed by an independent pilot bootstrap before the first pass (0.9 b_l / b +
+//      0.1 / levels), each set resampling within its level; or, with resample_levels, pbrt-v3's
+//      rule (each chain draws its level with its start from the joint bootstrap);
+//   3. each chain makes its share of the mutations: a large step with probability p_large, else a
+//      small step (pss_state.h), accepted with the Metropolis-Hastings rule of
+//      estimators/mcmc/acceptance.h (both steps are symmetric, T cancels); the proposed and the
+//      current state are both splatted with weights a and 1 - a (estimators/mcmc/kernel_step.h,
+//      splat_expected), each splat value v divided by I and multiplied by its group's
+//      P b_group / N_group (P pixels; derivation in docs/mlt-pss.md, "Normalisation");
+//   4. end_pass(1): the splats carry their scale.
+//
+// Determinism: bootstrap sample j of pass p uses Rng::for_sample(seed, key_bootstrap, p * L * M
+// + j); chain c of pass p uses Rng::for_sample(seed, key_chain, p * C + c) for its decisions and
+// key_state for its uniforms; chains run in parallel over fixed segments of mutations whose
+// splat buffers are merged in (segment, chain) order: bit-identical for any thread count.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "lib/film/film.h"
+#include "lib/integrator/render_settings.h"
+#include "lib/mcmc/pss/pss_sample.h"
+#include "lib/scene/world.h"
+
+namespace tb {
+
+namespace pss {
+
+// Deliberate errors for the negative controls (never set by `tb render`).
+enum class PssFault {
+  kNone,
+  kNoRejectedSplat,  // expected-value splatting without the (1 - a) splat of the current state
+  kNoTechniqueCount, // MMLT without the factor k + 1 (number of techniques) in the target
+};
+
+struct PssSettings {
+  double large_step_probability = 0.3;  // Kelemen et al. 2002, Sec. 5.3 (pbrt-v3 default 0.3)
+  double sigma = 0.01;                  // small-step standard deviation (pbrt-v3 default)
+  int64_t bootstrap = 100000;           // bootstrap samples per pass, split evenly over levels
+  int64_t chains = 64;                  // chains per pass (at most one per mutation)
+  int64_t segment = 1024;               // mutations per chain between splat merges (memory bound)
+  // Levels (MMLT path lengths). false: one chain set per level, its share of the mutations fixed
+  // by a pilot bootstrap (stratified over levels; docs/mlt-pss.md). true: as pbrt-v3, every
+  // chain draws its level with its start from the joint bootstrap distribution.
+  bool resample_levels = false;
+  PssFault fault = PssFault::kNone;
+  bool print_stats = false;             // acceptance rates and mutations/s to stderr
+};
+
+struct PssStats {
+  int64_t large_proposed = 0, large_accepted = 0;
+  int64_t small_proposed = 0, small_accepted = 0;
+  int64_t mutations = 0;
+  int64_t bootstrap_samples = 0;
+  int64_t zero_passes = 0;  // passes whose bootstrap found no contribution (b = 0)
+  int64_t nonfinite = 0;    // states whose target I was NaN or infinite (read as I = 0, never splatted)
+  double seconds = 0.0;     // wall time of the whole run, bootstrap included
+  double mutation_seconds = 0.0;  // wall time of the chains' mutations only
+  double last_b = 0.0;      // b of the last pass
+  double large_acceptance() const { return large_proposed ? double(large_accepted) / double(large_proposed) : 0.0; }
+  double small_acceptance() const { return small_proposed ? double(small_accepted) / double(small_proposed) : 0.0; }
+  // Mutations per second of the mutation phase (bootstrap and chain starts excluded).
+  double mutations_per_second() const { return mutation_seconds > 0 ? double(mutations) / mutation_seconds : 0.0; }
+  std::string message() const;
+};
+
+// Expected number of mutations per pass that a chain spends in each pixel at stationarity,
+// mutations * luminance(pixel) / sum of luminances, from an image of the same scene (a reference).
+// PSSMLT distributes mutations in proportion to brightness: a pixel visited a handful of times per
+// pass has far-from-normal Welch samples, which the image checks exclude (docs/mlt-pss.md).
+std::vector<double> expected_visits(const std::vector<Rgb>& image, int64_t mutations);
+
+// Renders settings.passes passes of settings.spp / settings.passes mutations per pixel each.
+// Returns the number of passes done.
+int64_t run_pss(const SampleFunction& f, const RenderSettings& settings, const PssSettings& pss, Film& film,
+                PssStats* stats = nullptr);
+
+}  // namespace pss
+
+// The registered renderers (default PssSettings; acceptance rates printed to stderr).
+int64_t render_pssmlt(const World& world, const RenderSettings& settings, Film& film);
+int64_t render_mmlt(const World& world, const RenderSettings& settings, Film& film);
+// PSSMLT over the path tracer (lib/integrator/path_tracer.h pt_sample): the target is the
+// luminance of one path-traced radiance sample.
+int64_t render_pssmlt_pt(const World& world, const RenderSettings& settings, Film& film);
+int64_t render_pssmlt_pt(const World& world, const RenderSettings& settings, const pss::PssSettings& pss, Film& film,
+                         pss::PssStats* stats);
+// The same with explicit MCMC settings and statistics.
+int64_t render_pssmlt(const World& world, const RenderSettings& settings, const pss::PssSettings& pss, Film& film,
+                      pss::PssStats* stats);
+int64_t render_mmlt(const World& world, const RenderSettings& settings, const pss::PssSettings& pss, Film& film,
+                    pss::PssStats* stats);
+
+}  // namespace tb

@@ -1,0 +1,122 @@
+// The primary-sample-space state of a Metropolis chain (Kelemen, Szirmay-Kalos, Antal & Csonka
+// 2002, "A Simple and Robust Mutation Strategy for the Metropolis Light Transport Algorithm"):
+// the uniforms u in [0,1)^inf that a Monte Carlo sample function consumes, mutated instead of
+// drawn afresh. The state implements Uniforms (lib/core/uniforms.h), so the same sampling code
+// (generate_camera_subpath, connect_bdpt, ...) runs on an RNG stream, a fixed array or a chain.
+//
+// Streams. Uniforms are organised in kStreams interleaved streams (camera, light, connection;
+// pbrt-v3 Sec. 16.4.4, MLTSampler): uniform i of stream s is coordinate i * kStreams + s of the
+// state, so a camera subpath that grows by one vertex does not shift the light subpath's numbers.
+// use_stream(s) switches stream and keeps each stream's read position; restart() rewinds all.
+//
+// Mutations (Kelemen et al. 2002, Sec. 3 and 4):
+//   large step: every coordinate replaced by a fresh uniform; T(x -> y) = 1 on [0,1)^n.
+//   small step: y_i = x_i + sigma z_i (mod 1), z_i ~ N(0,1) independent: the wrapped Gaussian
+//     T(x -> y) = prod_i g_sigma(y_i - x_i),  g_sigma(d) = sum_{m in Z} phi_sigma(d + m),
+//     which is symmetric, T(x -> y) = T(y -> x), since phi is even. (Kelemen's exponential
+//     perturbation is symmetric too; the Gaussian is used, as in pbrt-v3, because n small steps
+//     compose into one of sigma sqrt(n), which makes lazy updates exact in distribution.)
+//
+// Lazy updates (Kelemen et al. 2002, Sec. 5.1; pbrt-v3 Sec. 16.4.4): a coordinate is only brought
+// up to date when it is read. Each coordinate remembers the iteration it was last modified at;
+// reading it at iteration n after a gap applies, in order, (1) a fresh uniform if an accepted
+// large step happened in the gap, (2) the n_small accepted small steps of the gap at once as one
+// wrapped Gaussian of sigma sqrt(n_small), then (3) the current iteration's mutation. A rejected
+// iteration restores every coordinate modified in it and does not count as an iteration, so the
+// gap counts accepted iterations only, exactly as an eagerly updated state would.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "lib/core/rng.h"
+#include "lib/core/uniforms.h"
+
+namespace tb::pss {
+
+enum Stream : int { kCameraStream = 0, kLightStream = 1, kConnectionStream = 2 };
+inline constexpr int kStreams = 3;
+
+// Uniforms organised in streams (see the top of this file).
+class StreamUniforms : public Uniforms {
+ public:
+  virtual void use_stream(int stream) = 0;  // continue reading stream `stream`
+  virtual void restart() = 0;               // every stream back to its first uniform
+};
+
+// Wrapped Gaussian density on the circle [0,1): g_sigma(d) = sum_m phi_sigma(d + m), summed over
+// the images |m| <= ceil(12 sigma) + 1 (the rest is below 1e-31 of the peak); g(d) = g(-d) bitwise.
+double wrapped_normal_pdf(double d, double sigma);
+// x + d reduced to [0, 1) (d any real).
+double wrap01(double x);
+
+// The lazily updated chain state.
+class PssState final : public StreamUniforms {
+ public:
+  // rng: the stream of fresh uniforms and Gaussian perturbations; sigma: the small-step scale.
+  PssState(Rng rng, double sigma);
+
+  // Starts proposing: iteration n + 1 with a large or a small step. Rewinds the streams.
+  void start_iteration(bool large_step);
+  // Keeps the proposal (a large step then resets untouched coordinates when they are next read).
+  void accept();
+  // Restores every coordinate the proposal changed and returns to iteration n.
+  void reject();
+
+  // StreamUniforms
+  double next() override;
+  void use_stream(int stream) override { stream_ = stream; }
+  void restart() override { index_.fill(0); }
+
+  // Replaces the generator of fresh numbers (a chain started from a bootstrap sample regenerates
+  // that sample with the bootstrap's stream, then mutates with its own).
+  void set_rng(const Rng& rng) { rng_ = rng; }
+
+  // Introspection (tests, checks).
+  int64_t iteration() const { return iteration_; }
+  bool large_step() const { return large_; }
+  size_t coordinates() const { return x_.size(); }
+  // Current value of coordinate i, as stored (not brought up to date).
+  double stored(size_t i) const { return x_[i].value; }
+  int64_t last_modified(size_t i) const { return x_[i].modified; }
+  double sigma() const { return sigma_; }
+
+ private:
+  struct Coordinate {
+    double value = 0.0;
+    int64_t modified = -1;  // iteration of the last modification; -1: never set
+    double backup_value = 0.0;
+    int64_t backup_modified = -1;
+  };
+  void ensure_ready(size_t i);
+  double gaussian();
+
+  Rng rng_;
+  double sigma_;
+  std::vector<Coordinate> x_;
+  int64_t iteration_ = 0;
+  int64_t last_large_ = 0;  // last accepted large step (iteration 0: the initial draw)
+  bool large_ = false;      // iteration 0 is the initial draw: no mutation applied
+  int stream_ = 0;
+  std::array<size_t, kStreams> index_{};
+};
+
+// A fixed state u in [0,1)^n, read through the same stream layout (coordinate i * kStreams + s).
+// For the checks, whose states are plain vectors. Reading past the end throws std::out_of_range.
+class DenseStreams final : public StreamUniforms {
+ public:
+  explicit DenseStreams(const std::vector<double>& u) : u_(&u) {}
+  double next() override;
+  void use_stream(int stream) override { stream_ = stream; }
+  void restart() override { index_.fill(0); }
+  size_t max_read() const { return max_read_; }  // 1 + the largest coordinate read
+
+ private:
+  const std::vector<double>* u_;
+  int stream_ = 0;
+  std::array<size_t, kStreams> index_{};
+  size_t max_read_ = 0;
+};
+
+}  // namespace tb::pss

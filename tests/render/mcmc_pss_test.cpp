@@ -1,0 +1,381 @@
+// Primary-sample-space MLT (lib/mcmc/pss/): the lazily updated state against its eager definition,
+// the small step's density, pairwise detailed balance of the PSS kernel on the Cornell box target
+// (validate/mcmc/pairwise_balance.h), determinism over thread counts, and image unbiasedness of
+// PSSMLT (over BDPT and over a next-event path tracer) and MMLT against BDPT with Welch's t-test over
+// 32 independent passes (each pass its own bootstrap and chains), with the negative controls the
+// image test must reject. Pixels with fewer than 32 expected chain visits per pass are excluded
+// (docs/mlt-pss.md, "Checks and tests"). Statistical tests: alpha = 0.01 (image tests,
+// per-channel Šidák inside compare_channels), 1e-5 for the KS tests of the state; fixed seeds.
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <numeric>
+#include <sstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "lib/core/parallel.h"
+#include "lib/integrator/bdpt.h"
+#include "lib/mcmc/pss/pss_driver.h"
+#include "lib/mcmc/pss/pss_kernel.h"
+#include "lib/path/light_sampler.h"
+#include "lib/scene/scene_loader.h"
+#include "validate/mcmc/pairwise_balance.h"
+#include "validate/render/render_compare.h"
+#include "validate/stats/tests.h"
+
+namespace tb::pss {
+namespace {
+
+constexpr double kSigma = 0.01;
+
+// Signed circular difference b - a in [-0.5, 0.5).
+double circ(double a, double b) {
+  double d = b - a;
+  d -= std::floor(d + 0.5);
+  return d;
+}
+
+TEST(PssState, StreamsInterleave) {
+  const std::vector<double> u = [] {
+    std::vector<double> v(30);
+    std::iota(v.begin(), v.end(), 0.0);
+    return v;
+  }();
+  DenseStreams s(u);
+  s.use_stream(kLightStream);
+  EXPECT_EQ(s.next(), 1.0);
+  EXPECT_EQ(s.next(), 4.0);
+  s.use_stream(kCameraStream);
+  EXPECT_EQ(s.next(), 0.0);
+  s.use_stream(kLightStream);
+  EXPECT_EQ(s.next(), 7.0);  // streams keep their positions
+  s.use_stream(kConnectionStream);
+  EXPECT_EQ(s.next(), 2.0);
+  s.restart();
+  s.use_stream(kLightStream);
+  EXPECT_EQ(s.next(), 1.0);
+}
+
+// Reads `n` uniforms of each stream.
+std::vector<double> read_all(PssState& s, int n) {
+  std::vector<double> v;
+  for (int st = 0; st < kStreams; ++st) {
+    s.use_stream(st);
+    for (int i = 0; i < n; ++i) v.push_back(s.next());
+  }
+  return v;
+}
+
+TEST(PssState, RejectRestoresAcceptKeeps) {
+  PssState s(Rng::for_sample(1, 2, 3), kSigma);
+  const std::vector<double> x0 = read_all(s, 8);
+  for (bool large : {false, true}) {
+    s.start_iteration(large);
+    const std::vector<double> y = read_all(s, 12);  // reads 4 new coordinates per stream too
+    s.reject();
+    s.restart();
+    // Read back at the same iteration number without a new proposal: nothing is mutated.
+    EXPECT_EQ(s.iteration(), 0);
+    const std::vector<double> back = read_all(s, 8);
+    EXPECT_EQ(back, x0) << (large ? "large" : "small");
+    size_t changed = 0;
+    for (size_t i = 0; i < 8; ++i) changed += y[i] != x0[i];
+    EXPECT_EQ(changed, 8u);
+  }
+  s.start_iteration(false);
+  const std::vector<double> y = read_all(s, 8);
+  s.accept();
+  s.restart();
+  EXPECT_EQ(read_all(s, 8), y);  // same iteration: the accepted values, unchanged
+  for (size_t i = 0; i < y.size(); ++i) EXPECT_LT(std::abs(circ(x0[i], y[i])), 12 * kSigma);
+}
+
+// Lazy = eager in distribution: a coordinate left unread for n accepted small steps (with
+// rejected iterations in between, which do not count) moves by a wrapped N(0, n sigma^2), exactly
+// as a coordinate read, hence perturbed, at every accepted iteration. KS against the normal CDF
+// (the wrap is negligible at sigma sqrt(n) = 0.045: mass beyond 0.5 is below 1e-28), alpha 1e-5.
+TEST(PssState, LazyUpdateEqualsEager) {
+  constexpr int kAccepted = 20, kReps = 4000;
+  std::vector<double> lazy, eager;
+  for (int r = 0; r < kReps; ++r) {
+    PssState s(Rng::for_sample(5, 6, static_cast<uint64_t>(r)), kSigma);
+    Rng decide = Rng::for_sample(5, 7, static_cast<uint64_t>(r));
+    s.use_stream(kCameraStream);
+    const double e0 = s.next();
+    s.use_stream(kLightStream);
+    const double l0 = s.next();
+    int accepted = 0;
+    while (accepted < kAccepted - 1) {
+      s.start_iteration(false);
+      s.use_stream(kCameraStream);
+      s.next();  // the eager coordinate: read every iteration
+      if (decide.uniform() < 0.5) {
+        s.accept();
+        ++accepted;
+      } else {
+        s.reject();
+      }
+    }
+    s.start_iteration(false);
+    s.use_stream(kCameraStream);
+    const double e1 = s.next();
+    s.use_stream(kLightStream);
+    const double l1 = s.next();  // the lazy coordinate: first read after kAccepted small steps
+    s.accept();
+    eager.push_back(circ(e0, e1));
+    lazy.push_back(circ(l0, l1));
+  }
+  const double sd = kSigma * std::sqrt(double(kAccepted));
+  auto cdf = [sd](double d) { return stats::normal_cdf(d / sd); };
+  const auto kl = stats::ks_test(lazy, cdf), ke = stats::ks_test(eager, cdf);
+  EXPECT_GT(kl.p_value, 1e-5) << "lazy D = " << kl.statistic;
+  EXPECT_GT(ke.p_value, 1e-5) << "eager D = " << ke.statistic;
+}
+
+// An accepted large step in the gap makes the lazily read coordinate a fresh uniform; a rejected
+// one leaves it to the small steps.
+TEST(PssState, LazyLargeStep) {
+  constexpr int kReps = 4000;
+  std::vector<double> after_accepted, moved_rejected;
+  for (int r = 0; r < kReps; ++r) {
+    for (bool acc : {true, false}) {
+      PssState s(Rng::for_sample(8, acc, static_cast<uint64_t>(r)), kSigma);
+      s.use_stream(kCameraStream);
+      s.next();
+      s.use_stream(kLightStream);
+      const double l0 = s.next();
+      s.start_iteration(true);  // reads only the camera coordinate
+      s.use_stream(kCameraStream);
+      s.next();
+      if (acc)
+        s.accept();
+      else
+        s.reject();
+      s.start_iteration(false);
+      s.use_stream(kLightStream);
+      const double l1 = s.next();
+      s.accept();
+      if (acc)
+        after_accepted.push_back(circ(l0, l1) + 0.5);  // uniform on [0, 1) when l1 is fresh
+      else
+        moved_rejected.push_back(circ(l0, l1));
+    }
+  }
+  EXPECT_GT(stats::ks_test(after_accepted, [](double x) { return std::clamp(x, 0.0, 1.0); }).p_value, 1e-5);
+  // One accepted small step only (the rejected large step does not count).
+  EXPECT_GT(stats::ks_test(moved_rejected, [](double d) { return stats::normal_cdf(d / kSigma); }).p_value, 1e-5);
+}
+
+TEST(PssKernel, SmallStepDensitySymmetricAndNormalised) {
+  Rng rng(42);
+  for (int i = 0; i < 1000; ++i) {
+    const double d = rng.uniform() * 0.2 - 0.1;
+    EXPECT_DOUBLE_EQ(wrapped_normal_pdf(d, kSigma), wrapped_normal_pdf(-d, kSigma));
+    EXPECT_NEAR(wrapped_normal_pdf(d, 0.3), wrapped_normal_pdf(d + 1.0, 0.3), 1e-12);
+  }
+  for (double sigma : {0.01, 0.3}) {  // midpoint rule over one period: spectrally accurate
+    const int n = 20000;
+    double sum = 0;
+    for (int i = 0; i < n; ++i) sum += wrapped_normal_pdf((i + 0.5) / n, sigma) / n;
+    EXPECT_NEAR(sum, 1.0, 1e-9) << sigma;
+  }
+  const SmallStep step(kSigma);
+  RngUniforms u(rng);
+  for (int i = 0; i < 200; ++i) {
+    DenseState x(12);
+    for (double& v : x) v = u.next();
+    const auto y = step.propose(x, u);
+    ASSERT_TRUE(y);
+    const double f = step.density(x, *y), b = step.density(*y, x);
+    EXPECT_GT(f, 0.0);
+    EXPECT_NEAR(f, b, 1e-12 * f);
+  }
+}
+
+// ---- the Cornell box ---------------------------------------------------------------------------
+
+constexpr int kRes = 16, kDepth = 3;
+
+// scenes/cornell-box.json with camera.resolution rewritten in the JSON text.
+std::unique_ptr<World> load_cornell(int res) {
+  const std::string dir = std::string(TB_SOURCE_DIR) + "/scenes";
+  std::ifstream in(dir + "/cornell-box.json");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  nlohmann::json j = nlohmann::json::parse(ss.str());
+  j["camera"]["resolution"] = {res, res};
+  return load_world_from_string(j.dump(1), "cornell-box.json", dir);
+}
+
+struct Cornell {
+  std::unique_ptr<World> world = load_cornell(kRes);
+  LightSampler sampler{*world};
+  PathContext ctx{world.get(), &sampler};
+};
+
+Cornell& cornell() {
+  static Cornell c;
+  return c;
+}
+
+TEST(PssKernel, PairwiseDetailedBalanceCornellBox) {
+  const Cornell& c = cornell();
+  const SampleFunction f = bdpt_sample_function(c.ctx, kRes, kRes, kDepth);
+  const SampleFunction m = mmlt_sample_function(c.ctx, kRes, kRes, kDepth);
+  const size_t dims = kStreams * 40;  // more than the sample functions read at max_depth 3
+  const auto kernel = make_pss_kernel(f, 0, kSigma, 0.3);
+  const auto mkernel = make_pss_kernel(m, 2, kSigma, 0.3);  // paths of 3 segments
+  auto start = [&](const PssTarget& target) {
+    return [&target, dims](Uniforms& u) {
+      DenseState x(dims);
+      for (int tries = 0; tries < 64; ++tries) {  // any start sampler will do; prefer pi > 0
+        for (double& v : x) v = u.next();
+        if (target.density(x) > 0) break;
+      }
+      return x;
+    };
+  };
+  const auto r = mcmc::check_pairwise_balance<decltype(kernel)>(kernel, start(kernel.target()), 3000, 11, 1);
+  EXPECT_TRUE(r.passed) << r.message;
+  const auto rm = mcmc::check_pairwise_balance<decltype(mkernel)>(mkernel, start(mkernel.target()), 3000, 11, 2);
+  EXPECT_TRUE(rm.passed) << rm.message;
+  // The negative control of the generic checker applies: the rule without T (Metropolis ratio)
+  // is exact here, because both PSS mutations are symmetric; that is why the image checks carry
+  // the negative controls of this module (dropped rejected splat, dropped technique count).
+}
+
+// Bit-identical results for 1 and 2 threads.
+TEST(PssRender, DeterministicAcrossThreadCounts) {
+  const Cornell& c = cornell();
+  RenderSettings st;
+  st.spp = 8;
+  st.passes = 2;
+  st.max_depth = kDepth;
+  PssSettings p;
+  p.bootstrap = 512;
+  p.chains = 7;
+  p.segment = 100;
+  auto run = [&](size_t threads, bool mmlt) {
+    ThreadLimit limit(threads);
+    Film film(kRes, kRes);
+    if (mmlt)
+      render_mmlt(*c.world, st, p, film, nullptr);
+    else
+      render_pssmlt(*c.world, st, p, film, nullptr);
+    return film.welch().sum;
+  };
+  for (bool mmlt : {false, true}) {
+    const auto a = run(1, mmlt), b = run(2, mmlt);
+    ASSERT_EQ(a.size(), b.size());
+    for (size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i], b[i]) << "pixel " << i << (mmlt ? " mmlt" : " pssmlt");
+  }
+}
+
+// ---- image unbiasedness against BDPT ----------------------------------------------------------
+
+constexpr int64_t kPasses = 32;
+
+const Film& bdpt_reference() {
+  static const Film film = [] {
+    RenderSettings st;
+    st.passes = kPasses;
+    st.spp = kPasses * 96;
+    st.max_depth = kDepth;
+    st.seed = 101;
+    Film f(kRes, kRes);
+    render_bdpt(*cornell().world, st, f);
+    return f;
+  }();
+  return film;
+}
+
+Film render_mcmc(bool mmlt, PssFault fault, int64_t spp_pass, PssStats* stats) {
+  RenderSettings st;
+  st.passes = kPasses;
+  st.spp = kPasses * spp_pass;
+  st.max_depth = kDepth;
+  st.seed = mmlt ? 202 : 303;
+  PssSettings p;
+  // b's error is common to all pixels of a pass: keep it below theirs (docs/mlt-pss.md, "Checks").
+  p.bootstrap = mmlt ? 2 * spp_pass * kRes * kRes : spp_pass * kRes * kRes / 2;
+  p.chains = 256;
+  p.fault = fault;
+  Film film(kRes, kRes);
+  if (mmlt)
+    render_mmlt(*cornell().world, st, p, film, stats);
+  else
+    render_pssmlt(*cornell().world, st, p, film, stats);
+  return film;
+}
+
+// Welch comparison of an MCMC image with the reference over the pixels the chains visit at
+// least kMinVisits times per pass in expectation (expected_visits); the others are excluded.
+constexpr double kMinVisits = 32;
+ChannelCompare compare_mcmc(const Film& film, const Film& ref, int64_t mutations_per_pass, int64_t* excluded) {
+  const std::vector<double> visits = expected_visits(ref.mean_image(), mutations_per_pass);
+  std::vector<bool> mask(visits.size());
+  *excluded = 0;
+  for (size_t i = 0; i < visits.size(); ++i) *excluded += (mask[i] = visits[i] < kMinVisits);
+  WelchImage a = film.welch(), b = ref.welch();
+  exclude_pixels(a, b, mask);
+  return compare_channels(a, b, 0.01);
+}
+
+void expect_compare(bool mmlt, PssFault fault, int64_t spp_pass, bool expect_reject) {
+  PssStats stats;
+  const Film film = render_mcmc(mmlt, fault, spp_pass, &stats);
+  int64_t excluded = 0;
+  const ChannelCompare cmp = compare_mcmc(film, bdpt_reference(), spp_pass * kRes * kRes, &excluded);
+  EXPECT_EQ(film.nonfinite().count(), 0);
+  EXPECT_EQ(stats.nonfinite, 0);
+  EXPECT_EQ(cmp.rejects(), expect_reject) << (mmlt ? "mmlt: " : "pssmlt: ") << cmp.message();
+  std::printf("%s fault %d, %lld pixels excluded: %s\n  %s\n", mmlt ? "mmlt" : "pssmlt", static_cast<int>(fault),
+              static_cast<long long>(excluded), cmp.message().c_str(), stats.message().c_str());
+}
+
+// PSSMLT over a radiance estimator L(raster, u) through radiance_sample_function, the hook for the
+// path tracer: here a path tracer with next-event estimation and no MIS built from BDPT's
+// unweighted techniques: s = 0 for the emitter seen directly (t = 2), s = 1 (next-event) for every
+// longer path; each path length is estimated once, so it estimates the same image.
+TEST(PssRender, PssmltOverRadianceEstimatorUnbiasedAgainstBdpt) {
+  const Cornell& c = cornell();
+  const SampleFunction f = radiance_sample_function(kRes, kRes, [&c](const Vec2& raster, Uniforms& u) {
+    thread_local std::vector<PathVertex> cam;
+    const Vec2 lens = u.next2();
+    const int nc = generate_camera_subpath(c.ctx, raster, lens, u, kDepth + 2, &cam);
+    Rgb L(0.0);
+    const PathVertex unused;  // s = 1 samples its own emitter vertex (next-event); the span needs one
+    if (nc >= 2) L += connect_bdpt(c.ctx, {}, cam, 0, 2, u).unweighted;
+    for (int t = 2; t <= nc && t - 1 <= kDepth; ++t)
+      L += connect_bdpt(c.ctx, std::span<const PathVertex>(&unused, 1), cam, 1, t, u).unweighted;
+    return L;
+  });
+  constexpr int64_t kSppPass = 32;
+  RenderSettings st;
+  st.passes = kPasses;
+  st.spp = kPasses * kSppPass;
+  st.max_depth = kDepth;
+  st.seed = 404;
+  PssSettings p;
+  p.bootstrap = kSppPass * kRes * kRes / 2;
+  p.chains = 256;
+  Film film(kRes, kRes);
+  PssStats stats;
+  run_pss(f, st, p, film, &stats);
+  int64_t excluded = 0;
+  const ChannelCompare cmp = compare_mcmc(film, bdpt_reference(), kSppPass * kRes * kRes, &excluded);
+  EXPECT_EQ(stats.nonfinite, 0);
+  EXPECT_FALSE(cmp.rejects()) << cmp.message();
+  std::printf("pssmlt over next-event path tracing, %lld pixels excluded: %s\n  %s\n", static_cast<long long>(excluded),
+              cmp.message().c_str(), stats.message().c_str());
+}
+
+TEST(PssRender, PssmltUnbiasedAgainstBdpt) { expect_compare(false, PssFault::kNone, 64, false); }
+TEST(PssRender, MmltUnbiasedAgainstBdpt) { expect_compare(true, PssFault::kNone, 64, false); }
+TEST(PssRender, NegativeControlNoRejectedSplatIsCaught) { expect_compare(false, PssFault::kNoRejectedSplat, 32, true); }
+TEST(PssRender, NegativeControlNoTechniqueCountIsCaught) { expect_compare(true, PssFault::kNoTechniqueCount, 16, true); }
+
+}  // namespace
+}  // namespace tb::pss
