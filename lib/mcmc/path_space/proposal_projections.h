@@ -1,0 +1,58 @@
+// Low-dimensional projections of the path-space proposals with their STATED densities, for the
+// chi-square checks of proposal samples (VALIDATION.md A, "mutation proposals"; validate/chi2):
+//  - BidirWayProjection: one way of the bidirectional mutation at a fixed x with k >= 3 segments
+//    (delete x_{k-2}, add one vertex; split s' = 1: sampled from the light side at x_{k-3}, s' = 0:
+//    from the camera side at x_{k-1}). Projection: the unit direction from the sampling vertex to
+//    the new vertex. Stated density in solid angle: split_density() (area, at the new vertex)
+//    times d^2 / |cos theta| (geometric normal) at the first hit along the direction, which is
+//    where the sampled vertex lies. A density missing its geometry term is visibly off here.
+//  - LensOffsetProjection: the realised raster offset d = r(y) - r(x) of the lens perturbation in
+//    polar coordinates (phi, rho = ln |d|), in which Veach's kernel is flat. Stated density:
+//    T(x -> y) / |dr / dA(y_{k-1})| (the raster projection of T) times |d|^2, the Jacobian of
+//    (phi, rho) -> d. The rho range of the chart extends 0.2 beyond [ln r1, ln r2].
+//  - CausticAngleProjection: the realised direction change of the caustic perturbation as
+//    (phi, rho = ln theta) in the frame about the old direction; stated density T(x -> y) divided
+//    by |cos| / d^2 at y_{k-1} (area to solid angle) times sin(theta) theta (solid angle to
+//    (phi, rho)). Chart rho range 0.2 beyond [ln theta1, ln theta2].
+#pragma once
+
+#include <cstdint>
+#include <optional>
+
+#include "lib/mcmc/path_space/bidirectional_mutation.h"
+#include "lib/mcmc/path_space/caustic_perturbation.h"
+#include "lib/mcmc/path_space/lens_perturbation.h"
+
+namespace tb::path_space {
+
+struct BidirWayProjection {
+  const BidirectionalMutation* mut = nullptr;
+  MltPath x;
+  int s = 1;
+  std::optional<Vec3> sample(Uniforms& u) const;
+  double pdf(const Vec3& w) const;
+};
+
+struct LensOffsetProjection {
+  const LensPerturbation* lens = nullptr;
+  const PathContext* ctx = nullptr;
+  MltPath x;
+  std::optional<Vec2> sample(Uniforms& u) const;
+  double pdf(const Vec2& phi_rho) const;
+  Vec2 chart_lo() const;
+  Vec2 chart_hi() const;
+};
+
+struct CausticAngleProjection {
+  const CausticPerturbation* caustic = nullptr;
+  MltPath x;
+  std::optional<Vec2> sample(Uniforms& u) const;
+  double pdf(const Vec2& phi_rho) const;
+  Vec2 chart_lo() const;
+  Vec2 chart_hi() const;
+};
+
+// A BDPT-sampled path with exactly k segments (deterministic in seed).
+MltPath path_with_segments(const PathContext& ctx, int k, int max_depth, uint64_t seed);
+
+}  // namespace tb::path_space

@@ -1,0 +1,107 @@
+// Reference proposal densities of the path-space mutations, assembled independently of the
+// mutations' own density() code: the added vertices' densities are read from path_densities(y)
+// (lib/path/path.h, the per-vertex pL / pE arrays every MIS weight uses), not from the step-by-step
+// pdf_next calls of the mutation. The discrete choices (deletion, addition, split probabilities)
+// are the mutation's.
+//
+// WithReferenceDensity turns a Metropolis-Hastings kernel (estimators/mcmc/metropolis_hastings.h)
+// into the MoveKernel the pairwise detailed-balance checker (validate/mcmc/pairwise_balance.h)
+// evaluates, with the kernel's acceptance a(x -> y) (formed from the STATED densities) and the
+// reference density as the density of the move actually sampled:
+//   F = pi(x) c(x) T_ref(x -> y) a(x -> y),  B = pi(y) c(y) T_ref(y -> x) a(y -> x).
+// F = B for all pairs iff the stated ratio equals the reference ratio: a density stated with a
+// factor missing (a geometry term, the raster Jacobian) breaks the equality.
+// Test pairs: with max_tries > 1, sample_move redraws (from the same uniform stream) moves whose
+// destination has pi(y) = 0 (occluded connections, paths leaving the box), up to max_tries
+// times. This only chooses WHICH pairs the pointwise identity F = B is evaluated on (pairs with
+// flux), it does not enter F or B.
+#pragma once
+
+#include <optional>
+#include <utility>
+
+#include <cmath>
+
+#include "lib/mcmc/path_space/bidirectional_mutation.h"
+#include "lib/mcmc/path_space/caustic_perturbation.h"
+#include "lib/mcmc/path_space/lens_perturbation.h"
+
+namespace tb::path_space {
+
+inline double reference_density(const BidirectionalMutation& mut, const MltPath& x, const MltPath& y) {
+  if (y.segments() < 1 || y.segments() > mut.max_segments()) return 0.0;
+  const auto w = mut.way_between(x, y);
+  if (!w) return 0.0;
+  const double pd = mut.deletion_probability(x, w->l, w->m);
+  const double pa = mut.addition_probability(x.segments(), w->kd(), w->ka);
+  const auto splits = mut.valid_splits(x, *w);
+  if (!(pd > 0.0) || !(pa > 0.0) || splits.empty()) return 0.0;
+  const PathDensities d = path_densities(mut.context(), y.v);
+  double sum = 0.0;
+  for (int s : splits) {
+    double p = 1.0;
+    for (int i = w->l + 1; i <= w->l + w->na(); ++i) p *= i <= w->l + s ? d.pL[i] : d.pE[i];
+    sum += p;
+  }
+  return pd * pa * sum / static_cast<double>(splits.size());
+}
+
+inline double reference_density(const LensPerturbation& lens, const PathContext& ctx, const MltPath& x,
+                                const MltPath& y) {
+  const int k = x.segments();
+  if (y.segments() != k || !lens.applicable(x) || !lens.applicable(y)) return 0.0;
+  for (int i = 0; i <= k; ++i)
+    if (i != k - 1 && !same_vertex(x.v[i], y.v[i])) return 0.0;
+  const auto rx = path_raster(ctx, x), ry = path_raster(ctx, y);
+  if (!rx || !ry) return 0.0;
+  const PathDensities d = path_densities(ctx, y.v);
+  return lens.kernel_density(*ry - *rx) * static_cast<double>(ctx.world->camera().pixel_count()) * d.pE[k - 1];
+}
+
+// Caustic perturbation: kernel at the angle from acos of the dot product, times |cos| / d^2 at
+// y_{k-1} written out here (not through measure.h); the apex o is the mutation's.
+inline double reference_density(const CausticPerturbation& c, const MltPath& x, const MltPath& y) {
+  const int k = x.segments();
+  if (y.segments() != k || !c.applicable(x) || !c.applicable(y)) return 0.0;
+  for (int i = 0; i <= k; ++i)
+    if (i != k - 1 && !same_vertex(x.v[i], y.v[i])) return 0.0;
+  if (!c.same_side(x, y.v[k - 1].hit.p)) return 0.0;
+  const Vec3 a = c.apex(x), dx = x.v[k - 1].hit.p - a, dy = y.v[k - 1].hit.p - a;
+  const double ly = glm::length(dy);
+  const double cos_angle = glm::dot(dx, dy) / (glm::length(dx) * ly);
+  const double theta = std::acos(std::clamp(cos_angle, -1.0, 1.0));
+  return c.kernel_density(theta) * std::abs(glm::dot(y.v[k - 1].hit.ng, dy)) / (ly * ly * ly);
+}
+
+// K: a MetropolisHastings kernel; Ref: double(int component, const State& x, const State& y).
+template <class K, class Ref>
+class WithReferenceDensity {
+ public:
+  using State = typename K::State;
+  using Move = typename K::Move;
+  WithReferenceDensity(const K& kernel, Ref ref, int max_tries = 1)
+      : k_(&kernel), ref_(std::move(ref)), max_tries_(max_tries) {}
+  double target_density(const State& x) const { return k_->target_density(x); }
+  std::optional<Move> sample_move(const State& x, Uniforms& u) const {
+    std::optional<Move> m;
+    for (int i = 0; i < max_tries_; ++i) {
+      m = k_->sample_move(x, u);
+      if (m && k_->target_density(k_->destination(*m)) > 0.0) return m;
+    }
+    return m;
+  }
+  const State& destination(const Move& m) const { return k_->destination(m); }
+  Move reverse(const State& x, const Move& m) const { return k_->reverse(x, m); }
+  double move_density(const State& x, const Move& m) const {
+    const double c = k_->mixture().selection(m.component, x);
+    return c > 0.0 ? c * ref_(m.component, x, m.y) : 0.0;
+  }
+  double acceptance(const State& x, const Move& m) const { return k_->acceptance(x, m); }
+
+ private:
+  const K* k_;
+  Ref ref_;
+  int max_tries_;
+};
+
+}  // namespace tb::path_space

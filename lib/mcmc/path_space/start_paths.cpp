@@ -1,0 +1,109 @@
+#include "lib/mcmc/path_space/start_paths.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace tb::path_space {
+
+MltPath assemble_connection(const std::vector<PathVertex>& light, const std::vector<PathVertex>& camera, int s, int t,
+                            const Connection& c) {
+  MltPath x;
+  x.v.reserve(static_cast<size_t>(s + t));
+  for (int i = 0; i < s; ++i) x.v.push_back(light[i]);
+  for (int i = t - 1; i >= 0; --i) x.v.push_back(camera[i]);
+  if (s == 1 && t >= 2) x.v[0] = c.sampled;
+  if (t == 1) x.v.back() = c.sampled;
+  return x;
+}
+
+std::optional<MltPath> sample_bdpt_path(const PathContext& ctx, Uniforms& u, int max_depth, int min_segments,
+                                        int attempts) {
+  const Camera& cam = ctx.world->camera();
+  std::vector<PathVertex> cp, lp;
+  std::vector<MltPath> found;
+  for (int a = 0; a < attempts; ++a) {
+    const Vec2 uf = u.next2(), lens_u = u.next2();
+    const int nc = generate_camera_subpath(ctx, Vec2(uf.x * cam.width(), uf.y * cam.height()), lens_u, u,
+                                           max_depth + 2, &cp);
+    const int nl = generate_light_subpath(ctx, u, max_depth + 1, &lp);
+    found.clear();
+    for (int t = 1; t <= nc; ++t)
+      for (int s = 0; s <= nl; ++s) {
+        if (s + t < 2 || s + t - 2 > max_depth || s + t - 1 < min_segments) continue;
+        const Connection c = connect_bdpt(ctx, lp, cp, s, t, u);
+        if (luminance(c.unweighted) > 0.0) found.push_back(assemble_connection(lp, cp, s, t, c));
+      }
+    const double pick = u.next();
+    if (!found.empty())
+      return found[std::min(found.size() - 1, static_cast<size_t>(pick * static_cast<double>(found.size())))];
+  }
+  return std::nullopt;
+}
+
+namespace {
+
+// Replays bootstrap sample `index` of a chain: camera and light subpaths and the connections in
+// a fixed order; calls visit(s, t, connection, light, camera) until it returns false.
+template <class F>
+void bootstrap_sample(const PathContext& ctx, uint64_t seed, uint64_t chain, uint64_t index, int max_depth, F&& visit) {
+  Rng stream = Rng::for_sample(seed, 0x6d6c7400ULL + chain, index);  // key: "mlt" and the chain
+  RngUniforms rng(stream);
+  const Camera& cam = ctx.world->camera();
+  const Vec2 u_film = rng.next2(), lens_u = rng.next2();
+  const Vec2 raster(u_film.x * cam.width(), u_film.y * cam.height());
+  std::vector<PathVertex> cp, lp;
+  const int nc = generate_camera_subpath(ctx, raster, lens_u, rng, max_depth + 2, &cp);
+  const int nl = generate_light_subpath(ctx, rng, max_depth + 1, &lp);
+  for (int t = 1; t <= nc; ++t)
+    for (int s = 0; s <= nl; ++s) {
+      if (s + t < 2 || s + t - 2 > max_depth) continue;
+      const Connection c = connect_bdpt(ctx, lp, cp, s, t, rng);
+      if (!visit(s, t, c, lp, cp)) return;
+    }
+}
+
+struct Candidate {
+  uint64_t sample = 0;
+  int s = 0, t = 0;
+  double weight = 0.0;
+};
+
+}  // namespace
+
+ChainStart start_chain(const PathContext& ctx, uint64_t seed, uint64_t chain, int64_t n_boot, int max_depth,
+                       double pick) {
+  std::vector<Candidate> cands;
+  double sum = 0.0;
+  for (int64_t i = 0; i < n_boot; ++i)
+    bootstrap_sample(ctx, seed, chain, static_cast<uint64_t>(i), max_depth,
+                     [&](int s, int t, const Connection& c, const auto&, const auto&) {
+                       const double w = luminance(c.value);
+                       if (w > 0.0 && std::isfinite(w)) {
+                         sum += w;
+                         cands.push_back({static_cast<uint64_t>(i), s, t, w});
+                       }
+                       return true;
+                     });
+  ChainStart start;
+  start.b = sum / static_cast<double>(std::max<int64_t>(1, n_boot));
+  if (cands.empty()) return start;
+  const double target = pick * sum;
+  double acc = 0.0;
+  const Candidate* chosen = &cands.back();
+  for (const auto& c : cands) {
+    acc += c.weight;
+    if (target < acc) {
+      chosen = &c;
+      break;
+    }
+  }
+  bootstrap_sample(ctx, seed, chain, chosen->sample, max_depth,
+                   [&](int s, int t, const Connection& c, const auto& lp, const auto& cp) {
+                     if (s != chosen->s || t != chosen->t) return true;
+                     start.x = assemble_connection(lp, cp, s, t, c);
+                     return false;
+                   });
+  return start;
+}
+
+}  // namespace tb::path_space
