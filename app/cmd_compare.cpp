@@ -35,13 +35,15 @@ int compare_images(const CompareArgs& a) {
              r.alpha, r.alpha_each, r.alpha_pixel, r.tested, r.skipped_identical);
   fmt::print("  pixel-wise (Sidak over pixel-channels): p = {:.4g}{}\n", r.p_pixel_family,
              r.rejects_pixel() ? "  REJECTS" : "");
-  fmt::print("  Stouffer sum z / sqrt(P) = {:.4g}:          p = {:.4g}{}\n", r.stouffer.statistic, r.stouffer.p_value,
-             r.rejects_stouffer() ? "  REJECTS" : "");
-  fmt::print("  sum z^2 = {:.6g} (chi^2, {} dof):   p = {:.4g}{}\n", r.sum_z2.statistic, r.tested, r.sum_z2.p_value,
+  static const char* kChannel[] = {"R", "G", "B"};
+  auto ch = [](int c) { return c >= 0 && c < 3 ? kChannel[c] : "-"; };
+  fmt::print("  Stouffer sum z / sqrt(P), worst channel {} = {:.4g}:   p = {:.4g} (Sidak over 3 channels){}\n",
+             ch(r.stouffer_channel), r.stouffer.statistic, r.stouffer.p_value, r.rejects_stouffer() ? "  REJECTS" : "");
+  fmt::print("  sum z^2, worst channel {} = {:.6g} (chi^2, {:.0f} dof):   p = {:.4g} (Sidak over 3 channels){}\n",
+             ch(r.sum_z2_channel), r.sum_z2.statistic, r.sum_z2.dof, r.sum_z2.p_value,
              r.rejects_sum_z2() ? "  REJECTS" : "");
   if (r.zero_variance_mismatch > 0)
     fmt::print("  {} pixel-channels with zero variance in both images and different means\n", r.zero_variance_mismatch);
-  static const char* kChannel[] = {"R", "G", "B"};
   if (r.worst.x >= 0)
     fmt::print("  worst pixel ({}, {}) {}: A {:.6g}, B {:.6g}, t = {:.4g}, dof {:.4g}, p = {:.4g}\n", r.worst.x,
                r.worst.y, r.worst.channel >= 0 && r.worst.channel < 3 ? kChannel[r.worst.channel] : "?", r.worst.mean_a,

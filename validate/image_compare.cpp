@@ -34,10 +34,10 @@ double ImageCompareResult::p_value() const {
 
 std::string ImageCompareResult::message() const {
   return fmt::format(
-      "{}: P={} pixel-channels, mean rel. diff {:+.3g}; Stouffer Z={:.3g} (p={:.3g}), sum z^2={:.4g} (p={:.3g}), "
+      "{}: P={} pixel-channels, mean rel. diff {:+.3g}; Stouffer Z={:.3g} (ch {}, p={:.3g}), sum z^2={:.4g} (ch {}, p={:.3g}), "
       "worst pixel ({}, {}) ch {} t={:.3g} p={:.3g} (family p={:.3g}){}; alpha={} ({} per test)",
-      rejects() ? "different" : "consistent", tested, mean_relative_difference, stouffer.statistic, stouffer.p_value,
-      sum_z2.statistic, sum_z2.p_value, worst.x, worst.y, worst.channel, worst.t, worst.p, p_pixel_family,
+      rejects() ? "different" : "consistent", tested, mean_relative_difference, stouffer.statistic, stouffer_channel,
+      stouffer.p_value, sum_z2.statistic, sum_z2_channel, sum_z2.p_value, worst.x, worst.y, worst.channel, worst.t, worst.p, p_pixel_family,
       zero_variance_mismatch > 0 ? fmt::format(", {} zero-variance mismatches", zero_variance_mismatch) : "", alpha,
       alpha_each);
 }
@@ -53,6 +53,8 @@ nlohmann::json ImageCompareResult::details() const {
                      {"mean_b", worst.mean_b}, {"t", worst.t}, {"dof", worst.dof}, {"p", worst.p}}},
           {"p_pixel_family", p_pixel_family},
           {"stouffer_z", stouffer.statistic},
+          {"stouffer_channel", stouffer_channel},
+          {"sum_z2_channel", sum_z2_channel},
           {"stouffer_p", stouffer.p_value},
           {"sum_z2", sum_z2.statistic},
           {"sum_z2_dof", sum_z2.dof},
@@ -68,7 +70,7 @@ ImageCompareResult compare_welch_images(const WelchImage& a, const WelchImage& b
   ImageCompareResult r;
   r.alpha = alpha;
   r.alpha_each = stats::sidak_alpha(alpha, 3);
-  std::vector<double> z;
+  std::vector<double> z, zc[3];
   z.reserve(a.pixels() * 3);
   double min_p = 2.0, sum_diff = 0.0, sum_b = 0.0;
   for (size_t i = 0; i < a.pixels(); ++i) {
@@ -112,6 +114,7 @@ ImageCompareResult compare_welch_images(const WelchImage& a, const WelchImage& b
       pc.p = t.p_value;
       pc.z = z_from_two_sided_p(t.p_value, t.statistic);
       z.push_back(pc.z);
+      zc[c].push_back(pc.z);
       sum_diff += ma[c] - mb[c];
       sum_b += mb[c];
       if (pc.p < min_p) {
@@ -125,8 +128,25 @@ ImageCompareResult compare_welch_images(const WelchImage& a, const WelchImage& b
   if (r.tested > 0) {
     r.alpha_pixel = stats::sidak_alpha(r.alpha_each, r.tested);
     r.p_pixel_family = stats::sidak_adjust(std::min(min_p, 1.0), r.tested);
-    r.stouffer = stats::stouffer(z);
-    r.sum_z2 = stats::sum_z2_test(z);
+    // The three channels of a pixel come from the same paths, so their z are correlated: the global
+    // tests run per channel and the channel with the smallest p is Šidák-adjusted over the three
+    // (valid under any dependence between channels for the min-p form, conservative here).
+    bool first = true;
+    for (int c = 0; c < 3; ++c) {
+      if (zc[c].empty()) continue;
+      const stats::TestResult st = stats::stouffer(zc[c]), sq = stats::sum_z2_test(zc[c]);
+      if (first || st.p_value < r.stouffer.p_value) {
+        r.stouffer = st;
+        r.stouffer_channel = c;
+      }
+      if (first || sq.p_value < r.sum_z2.p_value) {
+        r.sum_z2 = sq;
+        r.sum_z2_channel = c;
+      }
+      first = false;
+    }
+    r.stouffer.p_value = stats::sidak_adjust(r.stouffer.p_value, 3);
+    r.sum_z2.p_value = stats::sidak_adjust(r.sum_z2.p_value, 3);
   }
   return r;
 }

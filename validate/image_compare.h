@@ -6,6 +6,9 @@
 //   (1) pixel-wise: reject if min p < Šidák(alpha_each, P) over the P pixel-channels tested;
 //   (2) Stouffer: Z = sum z_i / sqrt(P) (uniform-sign bias, e.g. a 2% scale error);
 //   (3) sum z_i^2 against chi^2_P (mixed-sign bias).
+// (2) and (3) assume independent z_i, which holds across pixels but not across the three channels
+// of a pixel (the same paths make them): they are run per channel, and the channel with the
+// smallest p is Šidák-adjusted over the three; the reported statistic is that channel's.
 // z_i is the normal quantile with the same two-sided p-value and the sign of t_i, so z_i is
 // standard normal under H0 whatever the Welch dof. Pixel-channels where both images have zero
 // variance are skipped when their means agree and count as hard failures when they differ.
@@ -34,7 +37,8 @@ struct ImageCompareResult {
   int64_t zero_variance_mismatch = 0;
   PixelChannelTest worst;           // smallest p
   double p_pixel_family = 1;        // Šidák-adjusted smallest p: 1 - (1 - p_min)^P
-  stats::TestResult stouffer, sum_z2;
+  stats::TestResult stouffer, sum_z2;  // of the channel with the smallest p; p Šidák-adjusted over 3
+  int stouffer_channel = -1, sum_z2_channel = -1;
   double mean_relative_difference = 0;  // sum(mean_a - mean_b) / sum(mean_b), for messages
 
   bool rejects_pixel() const { return zero_variance_mismatch > 0 || p_pixel_family < alpha_each; }
