@@ -66,6 +66,8 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   st.passes = std::min(a.passes, st.spp);
   st.time_budget_s = a.time_s;
   st.interrupted = interrupted;
+  RunReport report;
+  st.report = &report;
   if (a.time_s > 0) st.passes = std::max<int64_t>(st.passes, 1 << 20);  // passes until the budget runs out
   ProgressLine line(!a.no_progress && isatty(STDERR_FILENO));
   line.start(fmt::format("{} {}", a.integrator, std::filesystem::path(a.scene).filename().string()));
@@ -101,11 +103,25 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
                         {"nonfinite_samples", film.nonfinite().count()},
                         {"interrupted", interrupted && interrupted->load()},
                         {"scene_description", world->description()}};
+  if (!report.mutations.empty()) {
+    nlohmann::json m = nlohmann::json::array();
+    for (const auto& r : report.mutations)
+      m.push_back({{"name", r.name}, {"proposed", r.proposed}, {"accepted", r.accepted}, {"acceptance", r.acceptance()}});
+    rec["mutations"] = m;
+    rec["mutations_total"] = report.mutations_total;
+    rec["mutations_per_second"] = report.mutations_per_second;
+  }
   write_file_atomic(std::filesystem::path(a.out).replace_extension(".json").string(), rec.dump(1));
   fmt::print("{}: {}x{}, {} passes, {} spp in {:.2f} s ({:.3g} samples/s); {} non-finite samples rejected\n", a.out,
              film.width(), film.height(), passes, spp_done, seconds,
              static_cast<double>(spp_done) * static_cast<double>(film.pixel_count()) / seconds,
              film.nonfinite().count());
+  if (!report.mutations.empty()) {
+    fmt::print("{} mutations, {:.3g} mutations/s; acceptance:", report.mutations_total, report.mutations_per_second);
+    for (const auto& r : report.mutations)
+      fmt::print(" {} {:.3f} ({} proposed)", r.name, r.acceptance(), r.proposed);
+    fmt::print("\n");
+  }
   if (film.nonfinite().count() > 0)
     fmt::print("{} (replay: tb render {} --integrator {} --seed {})\n", film.nonfinite().summary(), a.scene,
                a.integrator, a.seed);

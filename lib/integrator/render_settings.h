@@ -4,6 +4,8 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <string>
+#include <vector>
 
 namespace tb {
 
@@ -14,6 +16,20 @@ enum class IntegratorFault {
   kMisMissingDensity,   // an MIS weight computed with one density left out of its denominator
   kNeeNoCosine,         // next-event estimation without the cosine at the receiving vertex
   kRouletteNoInverse,   // Russian roulette that drops paths without dividing survivors by q
+};
+
+// What an MCMC integrator reports of its run (`tb render` prints it and writes it to the JSON
+// record next to the image): per mutation type, proposals and acceptances.
+struct MutationReport {
+  std::string name;
+  int64_t proposed = 0;
+  int64_t accepted = 0;
+  double acceptance() const { return proposed > 0 ? static_cast<double>(accepted) / static_cast<double>(proposed) : 0.0; }
+};
+struct RunReport {
+  std::vector<MutationReport> mutations;
+  int64_t mutations_total = 0;
+  double mutations_per_second = 0.0;
 };
 
 struct RenderSettings {
@@ -31,6 +47,7 @@ struct RenderSettings {
   IntegratorFault fault = IntegratorFault::kNone;
   std::function<void(double)> progress = [](double) {};
   const std::atomic<bool>* interrupted = nullptr;  // stop between passes
+  RunReport* report = nullptr;  // filled by MCMC integrators when set
 };
 
 }  // namespace tb

@@ -122,7 +122,14 @@ MltStats run_mlt(const World& world, const RenderSettings& st, Film& film, const
 namespace tb {
 
 int64_t render_mlt(const World& world, const RenderSettings& settings, Film& film) {
-  return path_space::run_mlt(world, settings, film).chains;
+  const path_space::MltStats stats = path_space::run_mlt(world, settings, film);
+  if (settings.report) {
+    settings.report->mutations.clear();
+    for (const auto& m : stats.mutations) settings.report->mutations.push_back({m.name, m.proposed, m.accepted});
+    settings.report->mutations_total = stats.mutations_total;
+    settings.report->mutations_per_second = stats.mutations_per_second();
+  }
+  return stats.chains;
 }
 
 }  // namespace tb

@@ -277,6 +277,18 @@ int64_t run_pss(const SampleFunction& f, const RenderSettings& st, const PssSett
 
 }  // namespace pss
 
+namespace {
+
+void report_pss(const pss::PssStats& s, RunReport* report) {
+  if (!report) return;
+  report->mutations = {{"large step", s.large_proposed, s.large_accepted},
+                       {"small step", s.small_proposed, s.small_accepted}};
+  report->mutations_total = s.mutations;
+  report->mutations_per_second = s.mutations_per_second();
+}
+
+}  // namespace
+
 int64_t render_pssmlt(const World& world, const RenderSettings& settings, const pss::PssSettings& p, Film& film,
                       pss::PssStats* stats) {
   const LightSampler sampler(world);
@@ -306,20 +318,26 @@ int64_t render_mmlt(const World& world, const RenderSettings& settings, const ps
 
 int64_t render_pssmlt(const World& world, const RenderSettings& settings, Film& film) {
   pss::PssSettings p;
-  p.print_stats = true;
-  return render_pssmlt(world, settings, p, film, nullptr);
+  pss::PssStats stats;
+  const int64_t passes = render_pssmlt(world, settings, p, film, &stats);
+  report_pss(stats, settings.report);
+  return passes;
 }
 
 int64_t render_pssmlt_pt(const World& world, const RenderSettings& settings, Film& film) {
   pss::PssSettings p;
-  p.print_stats = true;
-  return render_pssmlt_pt(world, settings, p, film, nullptr);
+  pss::PssStats stats;
+  const int64_t passes = render_pssmlt_pt(world, settings, p, film, &stats);
+  report_pss(stats, settings.report);
+  return passes;
 }
 
 int64_t render_mmlt(const World& world, const RenderSettings& settings, Film& film) {
   pss::PssSettings p;
-  p.print_stats = true;
-  return render_mmlt(world, settings, p, film, nullptr);
+  pss::PssStats stats;
+  const int64_t passes = render_mmlt(world, settings, p, film, &stats);
+  report_pss(stats, settings.report);
+  return passes;
 }
 
 }  // namespace tb
