@@ -3,7 +3,9 @@
 // then rounded one ulp further away, so that the new ray cannot re-hit the surface it leaves.
 #pragma once
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 
 #include "lib/core/math.h"
 #include "lib/geometry/hit.h"
@@ -19,6 +21,23 @@ constexpr double gamma_f(int n) {
   return (n * eps_f) / (1 - n * eps_f);
 }
 
+// The next representable double above / below v (std::nextafter towards +/- infinity, without
+// the library call: pbrt-v4 NextFloatUp / NextFloatDown on the bit pattern).
+inline double next_double_up(double v) {
+  if (std::isinf(v) && v > 0) return v;
+  if (v == 0.0) v = 0.0;  // -0 -> +0
+  uint64_t bits = std::bit_cast<uint64_t>(v);
+  bits = v >= 0 ? bits + 1 : bits - 1;
+  return std::bit_cast<double>(bits);
+}
+inline double next_double_down(double v) {
+  if (std::isinf(v) && v < 0) return v;
+  if (v == 0.0) v = -0.0;  // +0 -> -0
+  uint64_t bits = std::bit_cast<uint64_t>(v);
+  bits = v > 0 ? bits - 1 : bits + 1;
+  return std::bit_cast<double>(bits);
+}
+
 // pbrt-v4 OffsetRayOrigin: p moved out of its error box on the side of w, then rounded away.
 inline Vec3 offset_ray_origin(const Vec3& p, const Vec3& p_error, const Vec3& ng, const Vec3& w) {
   const double d = glm::dot(glm::abs(ng), p_error);
@@ -27,9 +46,9 @@ inline Vec3 offset_ray_origin(const Vec3& p, const Vec3& p_error, const Vec3& ng
   Vec3 po = p + offset;
   for (int i = 0; i < 3; ++i) {
     if (offset[i] > 0)
-      po[i] = std::nextafter(po[i], kInfinity);
+      po[i] = next_double_up(po[i]);
     else if (offset[i] < 0)
-      po[i] = std::nextafter(po[i], -kInfinity);
+      po[i] = next_double_down(po[i]);
   }
   return po;
 }

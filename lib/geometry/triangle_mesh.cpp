@@ -17,6 +17,18 @@ TriangleMesh::TriangleMesh(std::vector<Vec3> positions, std::vector<glm::uvec3> 
   for (const glm::uvec3& t : tris_)
     for (int k = 0; k < 3; ++k)
       if (t[k] >= pos_.size()) throw std::invalid_argument("TriangleMesh: vertex index out of range");
+  frames_.reserve(tris_.size());
+  for (const glm::uvec3& t : tris_) {
+    const Vec3 e1 = pos_[t[1]] - pos_[t[0]], e2 = pos_[t[2]] - pos_[t[0]];
+    TriangleFrame f;
+    f.plane = glm::cross(e1, e2);
+    f.ng = glm::normalize(f.plane);
+    f.d00 = glm::dot(e1, e1);
+    f.d01 = glm::dot(e1, e2);
+    f.d11 = glm::dot(e2, e2);
+    f.denom = difference_of_products(f.d00, f.d11, f.d01, f.d01);
+    frames_.push_back(f);
+  }
   cdf_.reserve(tris_.size());
   CompensatedSum sum;
   for (uint32_t i = 0; i < tris_.size(); ++i) {
@@ -42,7 +54,7 @@ Hit TriangleMesh::surface_at(uint32_t prim, const Vec2& uv) const {
   h.p = b0 * p0 + b1 * p1 + b2 * p2;
   h.dpdu = p1 - p0;
   h.dpdv = p2 - p0;
-  h.ng = glm::normalize(glm::cross(h.dpdu, h.dpdv));
+  h.ng = frames_[prim].ng;
   if (!nrm_.empty()) {
     const Vec3 &n0 = nrm_[t[0]], &n1 = nrm_[t[1]], &n2 = nrm_[t[2]];
     const Vec3 a = b0 * n0 + b1 * n1 + b2 * n2;
@@ -79,16 +91,18 @@ Hit TriangleMesh::surface_at(uint32_t prim, const Vec2& uv) const {
 Hit TriangleMesh::refine_hit(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float) const {
   const glm::uvec3 tri = tris_[prim];
   const Vec3 &p0 = pos_[tri[0]], &p1 = pos_[tri[1]], &p2 = pos_[tri[2]];
-  const Vec3 e1 = p1 - p0, e2 = p2 - p0, nrm = glm::cross(e1, e2);
+  const Vec3 e1 = p1 - p0, e2 = p2 - p0;
+  const TriangleFrame& f = frames_[prim];
+  const Vec3& nrm = f.plane;
   const double den = glm::dot(nrm, ray.d);
   double t = t_float;
   Vec2 uv = uv_float;
   if (den != 0) {
     t = glm::dot(nrm, p0 - ray.o) / den;
     const Vec3 w = ray.at(t) - p0;
-    const double d00 = glm::dot(e1, e1), d01 = glm::dot(e1, e2), d11 = glm::dot(e2, e2);
+    const double d00 = f.d00, d01 = f.d01, d11 = f.d11;
     const double d20 = glm::dot(w, e1), d21 = glm::dot(w, e2);
-    const double denom = difference_of_products(d00, d11, d01, d01);
+    const double denom = f.denom;
     if (denom > 0) {
       double b1 = difference_of_products(d11, d20, d01, d21) / denom;
       double b2 = difference_of_products(d00, d21, d01, d20) / denom;

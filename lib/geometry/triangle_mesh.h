@@ -51,6 +51,14 @@ class TriangleMesh {
   std::vector<glm::uvec3> tris_;
   std::vector<Vec3> nrm_;
   std::vector<Vec2> uv_;
+  // Per-triangle quantities that every hit on the triangle needs, computed once (the same
+  // expressions surface_at and refine_hit would evaluate, so results are bit-identical).
+  struct TriangleFrame {
+    Vec3 ng{0.0};          // normalize(cross(p1 - p0, p2 - p0))
+    Vec3 plane{0.0};       // cross(p1 - p0, p2 - p0)
+    double d00 = 0, d01 = 0, d11 = 0, denom = 0;  // Gram matrix of (e1, e2) and its determinant
+  };
+  std::vector<TriangleFrame> frames_;
   std::vector<double> cdf_;  // cumulative triangle areas, cdf_.back() == total_area_
   double total_area_ = 0;
   bool flip_;
