@@ -52,7 +52,7 @@ std::string escape_pointer_token(const std::string& k) {
   return o;
 }
 
-struct Frame {
+struct JsonFrame {
   bool array = false;
   size_t index = 0;
   std::string key;
@@ -73,10 +73,10 @@ std::shared_ptr<const JsonDocument> JsonDocument::parse(const std::string& text,
     const size_t o = offset > 0 ? offset - 1 : 0;
     return static_cast<int>(std::upper_bound(line_starts.begin(), line_starts.end(), o) - line_starts.begin());
   };
-  std::vector<Frame> frames;
+  std::vector<JsonFrame> frames;
   auto child_pointer = [&]() -> std::string {
     if (frames.empty()) return "";
-    const Frame& f = frames.back();
+    const JsonFrame& f = frames.back();
     return f.pointer + "/" + (f.array ? std::to_string(f.index) : escape_pointer_token(f.key));
   };
   auto element_done = [&]() {
@@ -95,7 +95,7 @@ std::shared_ptr<const JsonDocument> JsonDocument::parse(const std::string& text,
           throw JsonError(fmt::format("{}:{}: JSON nested deeper than {} levels", file, line, kMaxDepth));
         const std::string ptr = child_pointer();
         doc->lines.emplace(ptr, line);
-        frames.push_back(Frame{event == E::array_start, 0, "", ptr});
+        frames.push_back(JsonFrame{event == E::array_start, 0, "", ptr});
         break;
       }
       case E::key:

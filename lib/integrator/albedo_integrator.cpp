@@ -1,10 +1,10 @@
 #include "lib/integrator/albedo_integrator.h"
 
-#include <chrono>
 
 #include "lib/core/rng.h"
 #include "lib/core/sample_dims.h"
 #include "lib/film/film_parallel.h"
+#include "lib/integrator/pass_loop.h"
 
 namespace tb {
 
@@ -35,37 +35,19 @@ Rgb primary_albedo(const World& world, const Ray& ray, Rng& rng) {
 
 int64_t render_albedo(const World& world, const RenderSettings& st, Film& film) {
   const Camera& cam = world.camera();
-  const int64_t passes = std::max<int64_t>(1, st.passes);
-  const int64_t spp_pass = std::max<int64_t>(1, st.spp / passes);
-  const auto t0 = std::chrono::steady_clock::now();
-  int64_t done = 0;
-  for (int64_t pass = 0; pass < passes; ++pass) {
-    if (st.interrupted && st.interrupted->load()) break;
+  return run_passes(st, film, [&](int64_t pass, int64_t spp_pass) {
     for_each_film_tile(film, 16, [&](FilmTile& tile) {
-      const PixelBounds& pb = tile.pixels();
-      for (int y = pb.y0; y < pb.y1; ++y)
-        for (int x = pb.x0; x < pb.x1; ++x) {
-          const uint64_t pixel = static_cast<uint64_t>(y) * static_cast<uint64_t>(film.width()) + static_cast<uint64_t>(x);
-          for (int64_t s = 0; s < spp_pass; ++s) {
-            const uint64_t index = static_cast<uint64_t>(pass * spp_pass + s);
-            Rng rng = Rng::for_sample(st.seed, pixel, index);
-            const Vec2 film_u = rng.uniform2();  // CameraDim::kFilmX, kFilmY
-            const Vec2 lens_u = rng.uniform2();  // CameraDim::kLensU, kLensV
-            const Vec2 raster(x + film_u.x, y + film_u.y);
-            const CameraRay cr = cam.generate_ray(raster, lens_u);
-            const Rgb v = cr.weight > 0 ? cr.weight * primary_albedo(world, cr.ray, rng) : Rgb(0.0);
-            tile.add_sample(raster, v, index);
-          }
-        }
+      for_each_camera_sample(tile, film.width(), st, pass, spp_pass, [&](int x, int y, uint64_t index, Rng& rng) {
+        const Vec2 film_u = rng.uniform2();  // CameraDim::kFilmX, kFilmY
+        const Vec2 lens_u = rng.uniform2();  // CameraDim::kLensU, kLensV
+        const Vec2 raster(x + film_u.x, y + film_u.y);
+        const CameraRay cr = cam.generate_ray(raster, lens_u);
+        const Rgb v = cr.weight > 0 ? cr.weight * primary_albedo(world, cr.ray, rng) : Rgb(0.0);
+        tile.add_sample(raster, v, index);
+      });
     });
-    film.end_pass();
-    ++done;
-    st.progress(static_cast<double>(done) / static_cast<double>(passes));
-    if (st.time_budget_s > 0 &&
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > st.time_budget_s)
-      break;
-  }
-  return done;
+    return 0.0;
+  });
 }
 
 }  // namespace tb

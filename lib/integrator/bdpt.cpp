@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 
 #include "lib/core/parallel.h"
 #include "lib/geometry/spawn.h"
+#include "lib/integrator/pass_loop.h"
 #include "lib/path/scattering.h"
 
 namespace tb {
@@ -291,18 +291,13 @@ Connection connect_bdpt(const PathContext& ctx, std::span<const PathVertex> ligh
 int64_t render_bdpt(const World& world, const RenderSettings& st, Film& film) {
   const LightSampler sampler(world);
   const PathContext ctx{&world, &sampler};
-  const int64_t passes = std::max<int64_t>(1, st.passes);
-  const int64_t spp_pass = std::max<int64_t>(1, st.spp / passes);
   const int max_depth = std::max(0, st.max_depth);
   const int max_cam = max_depth + 2, max_light = max_depth + 1;
   constexpr int kTile = 16;
   const int tx = (film.width() + kTile - 1) / kTile, ty = (film.height() + kTile - 1) / kTile;
   const size_t tiles = static_cast<size_t>(tx) * static_cast<size_t>(ty);
   constexpr size_t kBatch = 64;  // tiles per batch: bounds the splat memory, independent of threads
-  const auto t0 = std::chrono::steady_clock::now();
-  int64_t done = 0;
-  for (int64_t pass = 0; pass < passes; ++pass) {
-    if (st.interrupted && st.interrupted->load()) break;
+  return run_passes(st, film, [&](int64_t pass, int64_t spp_pass) {
     for (size_t first = 0; first < tiles; first += kBatch) {
       const size_t count = std::min(kBatch, tiles - first);
       std::vector<FilmTile> film_tiles;
@@ -319,13 +314,7 @@ int64_t render_bdpt(const World& world, const RenderSettings& st, Film& film) {
         std::vector<PathVertex> cam_path, light_path;
         cam_path.reserve(static_cast<size_t>(max_cam));
         light_path.reserve(static_cast<size_t>(max_light));
-        const PixelBounds& pb = tile.pixels();
-        for (int y = pb.y0; y < pb.y1; ++y)
-          for (int x = pb.x0; x < pb.x1; ++x) {
-            const uint64_t pixel = static_cast<uint64_t>(y) * static_cast<uint64_t>(film.width()) + static_cast<uint64_t>(x);
-            for (int64_t si = 0; si < spp_pass; ++si) {
-              const uint64_t index = static_cast<uint64_t>(pass * spp_pass + si);
-              Rng stream = Rng::for_sample(st.seed, pixel, index);
+        for_each_camera_sample(tile, film.width(), st, pass, spp_pass, [&](int x, int y, uint64_t index, Rng& stream) {
               RngUniforms rng(stream);
               const Vec2 film_u = rng.next2();
               const Vec2 lens_u = rng.next2();
@@ -348,22 +337,15 @@ int64_t render_bdpt(const World& world, const RenderSettings& st, Film& film) {
                     L += v;
                 }
               tile.add_sample(raster, L, index);
-            }
-          }
+        });
       });
       for (size_t b = 0; b < count; ++b) {
         film.merge_tile(film_tiles[b]);
         film.merge_splats(splats[b]);
       }
     }
-    film.end_pass(1.0 / static_cast<double>(spp_pass));
-    ++done;
-    st.progress(static_cast<double>(done) / static_cast<double>(passes));
-    if (st.time_budget_s > 0 &&
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > st.time_budget_s)
-      break;
-  }
-  return done;
+    return 1.0 / static_cast<double>(spp_pass);
+  });
 }
 
 }  // namespace tb

@@ -2,12 +2,12 @@
 
 #include <array>
 #include <atomic>
-#include <chrono>
 #include <stdexcept>
 
 #include "lib/core/rng.h"
 #include "lib/film/film_parallel.h"
 #include "lib/geometry/spawn.h"
+#include "lib/integrator/pass_loop.h"
 #include "lib/path/light_sampler.h"
 #include "lib/path/scattering.h"
 
@@ -142,16 +142,12 @@ int64_t render_lt(const World& world, const RenderSettings& st, Film& film) {
 
 int64_t render_lt(const World& world, const RenderSettings& st, Film& film, RayCounts* counts) {
   const LightTracer lt(world, st);
-  const int64_t passes = std::max<int64_t>(1, st.passes);
-  const int64_t spp_pass = std::max<int64_t>(1, st.spp / passes);
-  const uint64_t n = static_cast<uint64_t>(film.pixel_count() * spp_pass);  // light paths per pass
-  // Chunks depend only on n, so the merge order (and the image) is the same for any thread count.
+  // Chunks depend only on the number of paths, so the merge order (and the image) is the same for
+  // any thread count.
   constexpr uint64_t kChunk = 4096;
-  const auto t0 = std::chrono::steady_clock::now();
   std::atomic<int64_t> n_ext{0}, n_shadow{0};
-  int64_t done = 0;
-  for (int64_t pass = 0; pass < passes; ++pass) {
-    if (st.interrupted && st.interrupted->load()) break;
+  const int64_t done = run_passes(st, film, [&](int64_t pass, int64_t spp_pass) {
+    const uint64_t n = static_cast<uint64_t>(film.pixel_count() * spp_pass);  // light paths per pass
     const uint64_t first = static_cast<uint64_t>(pass) * n;
     splat_parallel(film, n, kChunk, [&](uint64_t s, SplatBuffer& buf) {
       RayCounts rc;
@@ -162,13 +158,8 @@ int64_t render_lt(const World& world, const RenderSettings& st, Film& film, RayC
         n_shadow.fetch_add(rc.shadow, std::memory_order_relaxed);
       }
     });
-    film.end_pass(static_cast<double>(film.pixel_count()) / static_cast<double>(n));
-    ++done;
-    st.progress(static_cast<double>(done) / static_cast<double>(passes));
-    if (st.time_budget_s > 0 &&
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > st.time_budget_s)
-      break;
-  }
+    return static_cast<double>(film.pixel_count()) / static_cast<double>(n);
+  });
   if (counts) {
     counts->extension += n_ext.load();
     counts->shadow += n_shadow.load();

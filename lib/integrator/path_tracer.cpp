@@ -2,7 +2,6 @@
 
 #include <array>
 #include <atomic>
-#include <chrono>
 
 #include "estimators/mis_heuristics.h"
 #include "lib/core/rng.h"
@@ -10,6 +9,7 @@
 #include "lib/core/sample_dims.h"
 #include "lib/film/film_parallel.h"
 #include "lib/geometry/spawn.h"
+#include "lib/integrator/pass_loop.h"
 #include "lib/path/light_sampler.h"
 #include "lib/path/scattering.h"
 
@@ -147,41 +147,24 @@ int64_t render_pt(const World& world, const RenderSettings& st, Film& film, RayC
   const LightSampler lights(world);
   const PathTracer pt(world, st, lights);
   const Camera& cam = world.camera();
-  const int64_t passes = std::max<int64_t>(1, st.passes);
-  const int64_t spp_pass = std::max<int64_t>(1, st.spp / passes);
-  const auto t0 = std::chrono::steady_clock::now();
   std::atomic<int64_t> n_ext{0}, n_shadow{0};
-  int64_t done = 0;
-  for (int64_t pass = 0; pass < passes; ++pass) {
-    if (st.interrupted && st.interrupted->load()) break;
+  const int64_t done = run_passes(st, film, [&](int64_t pass, int64_t spp_pass) {
     for_each_film_tile(film, 16, [&](FilmTile& tile) {
       RayCounts rc;
-      const PixelBounds& pb = tile.pixels();
-      for (int y = pb.y0; y < pb.y1; ++y)
-        for (int x = pb.x0; x < pb.x1; ++x) {
-          const uint64_t pixel = static_cast<uint64_t>(y) * static_cast<uint64_t>(film.width()) + static_cast<uint64_t>(x);
-          for (int64_t s = 0; s < spp_pass; ++s) {
-            const uint64_t index = static_cast<uint64_t>(pass * spp_pass + s);
-            Rng stream = Rng::for_sample(st.seed, pixel, index);
-            RngUniforms rng(stream);
-            const Vec2 film_u = rng.next2();  // CameraDim::kFilmX, kFilmY
-            const Vec2 lens_u = rng.next2();  // CameraDim::kLensU, kLensV
-            const Vec2 raster(x + film_u.x, y + film_u.y);
-            const CameraRay cr = cam.generate_ray(raster, lens_u);
-            const Rgb v = cr.weight > 0 ? cr.weight * pt.li(cr.ray, rng, rc) : Rgb(0.0);
-            tile.add_sample(raster, v, index);
-          }
-        }
+      for_each_camera_sample(tile, film.width(), st, pass, spp_pass, [&](int x, int y, uint64_t index, Rng& stream) {
+        RngUniforms rng(stream);
+        const Vec2 film_u = rng.next2();  // CameraDim::kFilmX, kFilmY
+        const Vec2 lens_u = rng.next2();  // CameraDim::kLensU, kLensV
+        const Vec2 raster(x + film_u.x, y + film_u.y);
+        const CameraRay cr = cam.generate_ray(raster, lens_u);
+        const Rgb v = cr.weight > 0 ? cr.weight * pt.li(cr.ray, rng, rc) : Rgb(0.0);
+        tile.add_sample(raster, v, index);
+      });
       n_ext.fetch_add(rc.extension, std::memory_order_relaxed);
       n_shadow.fetch_add(rc.shadow, std::memory_order_relaxed);
     });
-    film.end_pass();
-    ++done;
-    st.progress(static_cast<double>(done) / static_cast<double>(passes));
-    if (st.time_budget_s > 0 &&
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > st.time_budget_s)
-      break;
-  }
+    return 0.0;
+  });
   if (counts) {
     counts->extension += n_ext.load();
     counts->shadow += n_shadow.load();
