@@ -62,13 +62,28 @@ int compare_images(const CompareArgs& a) {
 
 }  // namespace
 
-int cmd_compare(const CompareArgs& a) {
-  if (!(a.alpha > 0 && a.alpha < 1)) {
-    fmt::print(stderr, "tb compare: --alpha must lie in (0, 1)\n");
-    return 2;
+int cmd_compare(const CompareArgs& a, const std::atomic<bool>* interrupted) {
+  auto reject_options = [](const std::vector<std::string>& given, const char* form) {
+    for (const auto& o : given) fmt::print(stderr, "tb compare: {} does not apply to the {} form\n", o, form);
+    return given.empty();
+  };
+  if (a.inputs.size() == 1 && !is_exr(a.inputs[0])) {
+    if (!reject_options(a.image_options_given, "scene")) return 2;
+    CompareSceneArgs s = a.scene;
+    s.scene = a.inputs[0];
+    return cmd_compare_scene(s, interrupted);
   }
-  if (a.inputs.size() == 2 && is_exr(a.inputs[0]) && is_exr(a.inputs[1])) return compare_images(a);
-  fmt::print(stderr, "tb compare: expected two EXR images (tb compare A.exr B.exr [--alpha A])\n");
+  if (a.inputs.size() == 2 && is_exr(a.inputs[0]) && is_exr(a.inputs[1])) {
+    if (!reject_options(a.scene_options_given, "image (A.exr B.exr)")) return 2;
+    if (!(a.alpha > 0 && a.alpha < 1)) {
+      fmt::print(stderr, "tb compare: --alpha must lie in (0, 1)\n");
+      return 2;
+    }
+    return compare_images(a);
+  }
+  fmt::print(stderr,
+             "tb compare: expected two EXR images (tb compare A.exr B.exr [--alpha A]) or one scene file "
+             "(tb compare SCENE --integrators A,B,... --time S [--reference REF.exr])\n");
   return 2;
 }
 

@@ -1,24 +1,34 @@
-// tb compare: statistical comparison of renders.
-//   tb compare A.exr B.exr [--alpha 0.01]
+// tb compare: statistical comparison of renders, and equal-time comparison of integrators.
+//   tb compare A.exr B.exr [--alpha 0.01] [--json R.json]
+//   tb compare SCENE --integrators A,B,... --time S [--reference REF.exr] [-o DIR] ...
+// Image form:
 // reads two EXRs written by tb render (mean, variance.R/G/B and count channels: the Welch
 // statistics of their passes, lib/film/exr_io.h) and runs the per-pixel Welch t-test with the
 // Stouffer and sum-z^2 global tests (validate/image_compare.h). Exit code 0 when the images are
 // consistent, 1 when they differ, 2 on bad input.
-// The positional arguments are dispatched on their form so that further forms (a SCENE with
-// --integrators for equal-time comparisons) can be added next to the image form.
+// Scene form (one positional argument, not an EXR): app/compare_scene.h, docs/compare.md.
+// The positional arguments are dispatched on their form; options of one form given with the
+// other are an error (settings are strict).
 #pragma once
 
+#include <atomic>
 #include <string>
 #include <vector>
+
+#include "app/compare_scene.h"
 
 namespace tb {
 
 struct CompareArgs {
-  std::vector<std::string> inputs;  // A.exr B.exr
+  std::vector<std::string> inputs;  // A.exr B.exr, or SCENE
   double alpha = 0.01;
   std::string json_out;             // optional: the full result as JSON
+  CompareSceneArgs scene;           // the scene form's options (scene.scene is set from inputs)
+  // Names of the options given on the command line that belong to one form only, so that using
+  // them with the other form is reported instead of ignored.
+  std::vector<std::string> image_options_given, scene_options_given;
 };
 
-int cmd_compare(const CompareArgs& a);
+int cmd_compare(const CompareArgs& a, const std::atomic<bool>* interrupted = nullptr);
 
 }  // namespace tb

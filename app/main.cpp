@@ -1,6 +1,6 @@
 // tb: the test bench program. Subcommands: check (validation suite), reproduce (a paper's
 // canonical experiment), report (regenerate an HTML report from its JSON), render (a scene to
-// OpenEXR), compare (statistical comparison of renders).
+// OpenEXR), compare (statistical comparison of renders; equal-time comparison of integrators).
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -196,10 +196,41 @@ int main(int argc, char** argv) {
 
   tb::CompareArgs cmpa;
   auto* compare = app.add_subcommand(
-      "compare", "Compare two renders statistically (per-pixel Welch t-test, Stouffer, sum z^2); exit 1 if they differ");
-  compare->add_option("inputs", cmpa.inputs, "A.exr B.exr (EXRs written by tb render)")->required();
-  compare->add_option("--alpha", cmpa.alpha, "Significance level of the whole comparison")->capture_default_str();
-  compare->add_option("--json", cmpa.json_out, "Write the full result to this JSON file");
+      "compare",
+      "Compare two renders statistically (A.exr B.exr: per-pixel Welch t-test, Stouffer, sum z^2; exit 1 if they "
+      "differ), or integrators at equal time on a scene (SCENE --integrators A,B --time S: rRMSE against time, "
+      "fitted rates, efficiency, HTML report; docs/compare.md)");
+  compare->add_option("inputs", cmpa.inputs, "A.exr B.exr (EXRs written by tb render), or one scene file")
+      ->required()->expected(1, 2);
+  const std::vector<std::string> compare_image_opts = {"--alpha", "--json"};
+  compare->add_option("--alpha", cmpa.alpha, "A.exr B.exr: significance level of the whole comparison")
+      ->capture_default_str();
+  compare->add_option("--json", cmpa.json_out, "A.exr B.exr: write the full result to this JSON file");
+  tb::CompareSceneArgs& cs = cmpa.scene;
+  const std::vector<std::string> compare_scene_opts = {"--integrators", "--time",  "--reference",   "--out",
+                                                       "--checkpoints", "--resolution", "--seed", "--threads", "--pass-spp",
+                                                       "--floor",       "--error-scale", "--resume", "--no-progress"};
+  compare->add_option("--integrators", cs.integrators, "SCENE: integrators to compare, comma separated (tb render --list)")
+      ->delimiter(',');
+  compare->add_option("--time", cs.time_s, "SCENE: time budget S in seconds of the largest checkpoint");
+  compare->add_option("--reference", cs.reference,
+                      "SCENE: reference EXR (default: render one with bdpt for 4 x S, announced on stdout)");
+  compare->add_option("-o,--out", cs.out, "SCENE: output folder (default reports/out/compare-<scene name>)");
+  compare->add_option("--checkpoints", cs.checkpoints, "SCENE: K independent runs with budgets S/2^(K-1) ... S/2, S")
+      ->capture_default_str();
+  compare->add_option("--resolution", cs.resolution, "SCENE: WxH, overrides the scene camera's resolution");
+  compare->add_option("--seed", cs.seed, "SCENE: seed (each run derives its own)")->capture_default_str();
+  compare->add_option("--pass-spp", cs.pass_spp,
+                      "SCENE: samples (MCMC: mutations) per pixel per pass; 0: 1, or enough to outweigh the PSS "
+                      "bootstrap")->capture_default_str();
+  compare->add_option("--threads", cs.threads, "SCENE: worker threads (0: all cores)")->capture_default_str();
+  compare->add_option("--floor", cs.floor_fraction,
+                      "SCENE: leave out pixel-channels whose reference is below this fraction of its mean")
+      ->capture_default_str();
+  compare->add_option("--error-scale", cs.error_scale, "SCENE: relative error shown white in the error maps")
+      ->capture_default_str();
+  compare->add_flag("--resume", cs.resume, "SCENE: reuse the runs of an interrupted invocation with the same settings");
+  compare->add_flag("--no-progress", cs.no_progress, "SCENE: no progress line on stderr");
 
   std::string report_json, report_out;
   auto* report = app.add_subcommand("report", "Regenerate an HTML report from results.json or report.json");
@@ -220,7 +251,14 @@ int main(int argc, char** argv) {
       return tb::cmd_render(rargs, &g_interrupted);
     }
     if (*report) return cmd_report(report_json, report_out);
-    if (*compare) return tb::cmd_compare(cmpa);
+    if (*compare) {
+      for (const auto& o : compare_image_opts)
+        if (compare->count(o) > 0) cmpa.image_options_given.push_back(o);
+      for (const auto& o : compare_scene_opts)
+        if (compare->count(o) > 0) cmpa.scene_options_given.push_back(o);
+      std::signal(SIGINT, on_sigint);
+      return tb::cmd_compare(cmpa, &g_interrupted);
+    }
   } catch (const std::exception& e) {
     fmt::print(stderr, "tb: error: {}\n", e.what());
     return 2;

@@ -80,6 +80,8 @@ std::string result_row(const nlohmann::json& r, const char* which) {
 
 }  // namespace
 
+std::string report_style() { return kStyle; }
+
 void write_check_report(const nlohmann::json& results, const std::string& out_dir) {
   std::ostringstream h;
   const auto& cfg = results["config"];

@@ -16,4 +16,7 @@ void write_check_report(const nlohmann::json& results, const std::string& out_di
 // Writes OUT_DIR/index.html for one experiment of `tb reproduce`.
 void write_experiment_report(const std::string& name, const nlohmann::json& report, const std::string& out_dir);
 
+// The <style> element shared by the reports (for report pages written elsewhere in reports/).
+std::string report_style();
+
 }  // namespace tb

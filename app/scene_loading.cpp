@@ -1,0 +1,33 @@
+#include "app/scene_loading.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "lib/core/atomic_file.h"
+#include "lib/scene/scene_loader.h"
+
+namespace tb {
+
+std::pair<int, int> parse_resolution(const std::string& s) {
+  int w = 0, h = 0;
+  char x = 0, extra = 0;
+  if (std::sscanf(s.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w <= 0 || h <= 0)
+    throw std::invalid_argument("--resolution '" + s + "': expected WxH with positive integers, e.g. 512x512");
+  return {w, h};
+}
+
+std::unique_ptr<World> load_scene_file(const std::string& path, const std::string& resolution) {
+  if (resolution.empty()) return load_world(path);
+  const auto [w, h] = parse_resolution(resolution);
+  nlohmann::json j = nlohmann::json::parse(read_file(path));
+  if (!j.is_object() || !j.contains("camera") || !j["camera"].is_object())
+    throw std::invalid_argument(path + ": no camera object to set the resolution of");
+  j["camera"]["resolution"] = {w, h};
+  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  return load_world_from_string(j.dump(1), path, parent.empty() ? "." : parent.string());
+}
+
+}  // namespace tb
