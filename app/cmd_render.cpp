@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "app/progress.h"
+#include "app/scene_loading.h"
 #include "lib/core/atomic_file.h"
 #include "lib/core/parallel.h"
 #include "lib/film/exr_io.h"
@@ -17,31 +18,6 @@
 #include "lib/scene/scene_loader.h"
 
 namespace tb {
-
-namespace {
-
-// "WxH" -> (W, H); throws std::invalid_argument on anything else.
-std::pair<int, int> parse_resolution(const std::string& s) {
-  int w = 0, h = 0;
-  char x = 0, extra = 0;
-  if (std::sscanf(s.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w <= 0 || h <= 0)
-    throw std::invalid_argument("--resolution '" + s + "': expected WxH with positive integers, e.g. 512x512");
-  return {w, h};
-}
-
-// The scene file, with the camera resolution replaced when --resolution is given.
-std::unique_ptr<World> load_scene(const RenderArgs& a) {
-  if (a.resolution.empty()) return load_world(a.scene);
-  const auto [w, h] = parse_resolution(a.resolution);
-  nlohmann::json j = nlohmann::json::parse(read_file(a.scene));
-  if (!j.is_object() || !j.contains("camera") || !j["camera"].is_object())
-    throw std::invalid_argument(a.scene + ": no camera object to set the resolution of");
-  j["camera"]["resolution"] = {w, h};
-  const std::filesystem::path parent = std::filesystem::path(a.scene).parent_path();
-  return load_world_from_string(j.dump(1), a.scene, parent.empty() ? "." : parent.string());
-}
-
-}  // namespace
 
 int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   if (a.list) {
@@ -56,7 +32,7 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     return 2;
   }
   const auto t_load = std::chrono::steady_clock::now();
-  std::unique_ptr<World> world = load_scene(a);
+  std::unique_ptr<World> world = load_scene_file(a.scene, a.resolution);
   const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count();
 
   RenderSettings st;
@@ -68,7 +44,12 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   st.interrupted = interrupted;
   RunReport report;
   st.report = &report;
-  if (a.time_s > 0) st.passes = std::max<int64_t>(st.passes, 1 << 20);  // passes until the budget runs out
+  if (a.time_s > 0) {  // open-ended passes of default_pass_spp each, until the budget runs out
+    st.passes = int64_t{1} << 24;
+    const int64_t n = a.spp > 0 ? std::max<int64_t>(1, a.spp)
+                                : default_pass_spp(a.integrator, world->camera().width() * world->camera().height());
+    st.spp = st.passes * n;
+  }
   ProgressLine line(!a.no_progress && isatty(STDERR_FILENO));
   line.start(fmt::format("{} {}", a.integrator, std::filesystem::path(a.scene).filename().string()));
   const auto t_start = std::chrono::steady_clock::now();

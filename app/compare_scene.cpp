@@ -50,19 +50,6 @@ constexpr double kReferenceBudgetFactor = 4.0;
 // n P mutations (path-space MLT: lib/mcmc/path_space/mlt.cpp), P = pixel count.
 constexpr int64_t kOpenEndedPasses = int64_t(1) << 24;
 
-// Samples per pixel per pass (n above) when --pass-spp is not given: 1, except for the
-// integrators on the primary-sample-space driver, whose every pass starts with a bootstrap of
-// PssSettings::bootstrap samples (100,000): n = ceil(bootstrap / P), so a pass's mutations are
-// at least as many as its bootstrap samples instead of a small fraction of them.
-int64_t default_pass_spp(const std::string& integrator, int64_t pixels) {
-  for (const char* prefix : {"pssmlt", "mmlt", "msmlt"})
-    if (integrator.rfind(prefix, 0) == 0) {
-      const int64_t boot = pss::PssSettings{}.bootstrap;
-      return std::max<int64_t>(1, (boot + pixels - 1) / pixels);
-    }
-  return 1;
-}
-
 struct Run {
   double budget = 0.0, seconds = 0.0;
   int64_t passes = 0, nonfinite_samples = 0;

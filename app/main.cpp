@@ -16,6 +16,7 @@
 #include "app/cmd_render.h"
 #include "app/progress.h"
 #include "lib/core/atomic_file.h"
+#include "reports/compare_report.h"
 #include "reports/html_report.h"
 #include "validate/experiment.h"
 #include "validate/registry.h"
@@ -143,7 +144,9 @@ int cmd_reproduce(const ReproduceArgs& a) {
 int cmd_report(const std::string& json_path, const std::string& out) {
   const nlohmann::json j = nlohmann::json::parse(tb::read_file(json_path));
   const std::string dir = out.empty() ? std::filesystem::path(json_path).parent_path().string() : out;
-  if (j.contains("checks"))
+  if (j.value("kind", "") == "tb compare scene")
+    tb::write_compare_report(j, dir);
+  else if (j.contains("checks"))
     tb::write_check_report(j, dir);
   else
     tb::write_experiment_report(j["config"].value("experiment", "experiment"), j, dir);
@@ -184,7 +187,7 @@ int main(int argc, char** argv) {
   auto* render = app.add_subcommand("render", "Render a scene file to OpenEXR (+ PNG preview, JSON record)");
   render->add_option("scene", rargs.scene, "Scene file (JSON, docs/scene.md)");
   render->add_option("--integrator", rargs.integrator, "Integrator name (see --list)")->capture_default_str();
-  render->add_option("--spp", rargs.spp, "Samples per pixel (default: the scene's, else 16)");
+  render->add_option("--spp", rargs.spp, "Samples per pixel (default: the scene's, else 16); with --time, per pass (default 1, PSS MCMC: 100000 / pixels)");
   render->add_option("--passes", rargs.passes, "Welch samples per pixel (spp is split over them)")->capture_default_str();
   render->add_option("--time", rargs.time_s, "Time budget in seconds: render passes until it runs out");
   render->add_option("--seed", rargs.seed, "Seed");
@@ -234,7 +237,7 @@ int main(int argc, char** argv) {
 
   std::string report_json, report_out;
   auto* report = app.add_subcommand("report", "Regenerate an HTML report from results.json or report.json");
-  report->add_option("json", report_json, "results.json (tb check) or report.json (tb reproduce)")->required()
+  report->add_option("json", report_json, "results.json (tb check, tb compare SCENE) or report.json (tb reproduce)")->required()
       ->check(CLI::ExistingFile);
   report->add_option("--out", report_out, "Output folder (default: the JSON file's folder)");
 

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lib/core/atomic_file.h"
+#include "lib/mcmc/pss/pss_driver.h"
 #include "lib/scene/scene_loader.h"
 
 namespace tb {
@@ -28,6 +29,19 @@ std::unique_ptr<World> load_scene_file(const std::string& path, const std::strin
   j["camera"]["resolution"] = {w, h};
   const std::filesystem::path parent = std::filesystem::path(path).parent_path();
   return load_world_from_string(j.dump(1), path, parent.empty() ? "." : parent.string());
+}
+
+// Samples per pixel per pass of a time-budgeted run (see scene_loading.h): 1, except for the
+// integrators on the primary-sample-space driver, whose every pass starts with a bootstrap of
+// PssSettings::bootstrap samples (100,000): n = ceil(bootstrap / P), so a pass's mutations are
+// at least as many as its bootstrap samples instead of a small fraction of them.
+int64_t default_pass_spp(const std::string& integrator, int64_t pixels) {
+  for (const char* prefix : {"pssmlt", "mmlt", "msmlt"})
+    if (integrator.rfind(prefix, 0) == 0) {
+      const int64_t boot = pss::PssSettings{}.bootstrap;
+      return std::max<int64_t>(1, (boot + pixels - 1) / pixels);
+    }
+  return 1;
 }
 
 }  // namespace tb

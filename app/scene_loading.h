@@ -1,8 +1,9 @@
-// Loading a scene file for the program's subcommands, with the camera resolution optionally
-// overridden from the command line ("WxH"). Used by `tb compare SCENE ...`; `tb render` keeps
-// its own copy of the same two steps (app/cmd_render.cpp) and can switch to this helper.
+// Loading a scene file for the program's subcommands (`tb render`, `tb compare SCENE`), with the
+// camera resolution optionally overridden from the command line ("WxH"); and the pass size of
+// time-budgeted runs, shared by both.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <utility>
@@ -17,5 +18,12 @@ std::pair<int, int> parse_resolution(const std::string& s);
 // The scene file; when `resolution` is not empty, the camera's "resolution" is replaced by it
 // before the scene is built (relative paths in the file still resolve against its folder).
 std::unique_ptr<World> load_scene_file(const std::string& path, const std::string& resolution);
+
+// Time-budgeted runs use open-ended passes (far more than any budget reaches) of n samples per
+// pixel each, spp = n * passes: n samples per pixel for path tracing, light tracing and BDPT; n P
+// mutations after a bootstrap for the primary-sample-space MCMC integrators (P = pixel count);
+// one chain of n P mutations for path-space MLT. n = 1, except for the primary-sample-space
+// integrators, whose pass starts with a bootstrap of 100,000 samples: n = ceil(100000 / P).
+int64_t default_pass_spp(const std::string& integrator, int64_t pixels);
 
 }  // namespace tb
