@@ -184,8 +184,9 @@ std::optional<Hit> Scene::intersect(const Ray& ray, double tmax) const {
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
   const Entry& e = *entries_[rh.hit.geomID];
   if (const auto* m = std::get_if<TriangleMesh>(&e.shape)) {
-    Hit h = m->refine_hit(rh.hit.primID, ray, rh.ray.tfar, Vec2(rh.hit.u, rh.hit.v));
-    h.shape_id = e.id;
+    std::optional<Hit> h(std::in_place);  // filled in place: no copy of the Hit
+    m->refine_hit(rh.hit.primID, ray, rh.ray.tfar, Vec2(rh.hit.u, rh.hit.v), &*h);
+    h->shape_id = e.id;
     return h;
   }
   // The last analytic hit accepted has the smallest t among analytic shapes, and it is the
@@ -221,6 +222,19 @@ AreaSample Scene::sample_area(uint32_t shape_id, const Vec2& u) const {
   AreaSample s = is_mesh(shape_id) ? mesh(shape_id).sample_area(u) : analytic(shape_id).sample_area(u);
   s.hit.shape_id = shape_id;
   return s;
+}
+
+double Scene::sample_area_into(uint32_t shape_id, const Vec2& u, Hit* h) const {
+  double pdf = 0.0;
+  if (is_mesh(shape_id)) {
+    pdf = mesh(shape_id).sample_area(u, h);
+  } else {
+    const AreaSample s = analytic(shape_id).sample_area(u);
+    *h = s.hit;
+    pdf = s.pdf_area;
+  }
+  h->shape_id = shape_id;
+  return pdf;
 }
 
 double Scene::pdf_area(const Hit& h) const {

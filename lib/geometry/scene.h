@@ -49,6 +49,8 @@ class Scene {
   Hit surface_at(uint32_t shape_id, uint32_t prim_id, const Vec2& uv) const;
   // Area sampling of one shape; density per unit world area.
   AreaSample sample_area(uint32_t shape_id, const Vec2& u) const;
+  // The same point written into *h (no copies of the Hit for meshes); returns pdf_area.
+  double sample_area_into(uint32_t shape_id, const Vec2& u, Hit* h) const;
   double pdf_area(const Hit& h) const;
 
   // The committed RTCScene (as void*, so that this header needs no Embree include), for

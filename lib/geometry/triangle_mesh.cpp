@@ -44,11 +44,12 @@ double TriangleMesh::triangle_area(uint32_t prim) const {
   return 0.5 * glm::length(glm::cross(pos_[t[1]] - pos_[t[0]], pos_[t[2]] - pos_[t[0]]));
 }
 
-Hit TriangleMesh::surface_at(uint32_t prim, const Vec2& uv) const {
+void TriangleMesh::surface_at(uint32_t prim, const Vec2& uv, Hit* out) const {
   const glm::uvec3 t = tris_[prim];
   const Vec3 &p0 = pos_[t[0]], &p1 = pos_[t[1]], &p2 = pos_[t[2]];
   const double b1 = uv.x, b2 = uv.y, b0 = 1 - b1 - b2;
-  Hit h;
+  Hit& h = *out;
+  h = Hit{};
   h.prim_id = prim;
   h.uv = uv;
   h.p = b0 * p0 + b1 * p1 + b2 * p2;
@@ -85,10 +86,9 @@ Hit TriangleMesh::surface_at(uint32_t prim, const Vec2& uv) const {
   // still needs an offset in z.
   const Vec3 mag = glm::abs(b0 * p0) + glm::abs(b1 * p1) + glm::abs(b2 * p2);
   h.p_error = Vec3(gamma_f(32) * std::max({mag.x, mag.y, mag.z}));
-  return h;
 }
 
-Hit TriangleMesh::refine_hit(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float) const {
+void TriangleMesh::refine_hit(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float, Hit* h) const {
   const glm::uvec3 tri = tris_[prim];
   const Vec3 &p0 = pos_[tri[0]], &p1 = pos_[tri[1]], &p2 = pos_[tri[2]];
   const Vec3 e1 = p1 - p0, e2 = p2 - p0;
@@ -116,9 +116,8 @@ Hit TriangleMesh::refine_hit(uint32_t prim, const Ray& ray, double t_float, cons
       uv = {b1, b2};
     }
   }
-  Hit h = surface_at(prim, uv);
-  h.t = t;
-  return h;
+  surface_at(prim, uv, h);
+  h->t = t;
 }
 
 Vec2 TriangleMesh::texcoord(uint32_t prim, const Vec2& uv) const {
@@ -128,6 +127,12 @@ Vec2 TriangleMesh::texcoord(uint32_t prim, const Vec2& uv) const {
 }
 
 AreaSample TriangleMesh::sample_area(const Vec2& u) const {
+  AreaSample a;
+  a.pdf_area = sample_area(u, &a.hit);
+  return a;
+}
+
+double TriangleMesh::sample_area(const Vec2& u, Hit* h) const {
   const double target = u.x * total_area_;
   const auto it = std::upper_bound(cdf_.begin(), cdf_.end(), target);
   const uint32_t prim = static_cast<uint32_t>(std::min<ptrdiff_t>(it - cdf_.begin(), static_cast<ptrdiff_t>(cdf_.size()) - 1));
@@ -135,7 +140,8 @@ AreaSample TriangleMesh::sample_area(const Vec2& u) const {
   const double width = cdf_[prim] - lo;
   const double s = width > 0 ? std::clamp((target - lo) / width, 0.0, 1.0) : 0.0;  // re-used uniform
   const double su = std::sqrt(s);
-  return {surface_at(prim, {su * (1 - u.y), su * u.y}), 1.0 / total_area_};
+  surface_at(prim, {su * (1 - u.y), su * u.y}, h);
+  return 1.0 / total_area_;
 }
 
 }  // namespace tb

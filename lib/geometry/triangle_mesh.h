@@ -33,10 +33,21 @@ class TriangleMesh {
   bool has_normals() const { return !nrm_.empty(); }
 
   // Differential geometry at barycentrics uv = (b1, b2) of triangle `prim`.
-  Hit surface_at(uint32_t prim, const Vec2& uv) const;
+  Hit surface_at(uint32_t prim, const Vec2& uv) const {
+    Hit h;
+    surface_at(prim, uv, &h);
+    return h;
+  }
+  // The same, written into *h (every field of a Hit is set).
+  void surface_at(uint32_t prim, const Vec2& uv, Hit* h) const;
   // Re-intersects the double ray with triangle `prim` (plane intersection, barycentrics clamped
   // to the triangle): refines a float hit reported by Embree. Falls back to (t, uv) given.
-  Hit refine_hit(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float) const;
+  Hit refine_hit(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float) const {
+    Hit h;
+    refine_hit(prim, ray, t_float, uv_float, &h);
+    return h;
+  }
+  void refine_hit(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float, Hit* h) const;
   Vec2 texcoord(uint32_t prim, const Vec2& uv) const;
 
   double area() const { return total_area_; }
@@ -44,6 +55,8 @@ class TriangleMesh {
   // Uniform by area: triangle chosen by area (u.x, re-used), uniform barycentrics
   // (b0 = 1 - sqrt(s)); density 1 / area() per unit area.
   AreaSample sample_area(const Vec2& u) const;
+  // The same point written into *h; returns its density per unit area.
+  double sample_area(const Vec2& u, Hit* h) const;
   double pdf_area() const { return 1.0 / total_area_; }
 
  private:
