@@ -138,13 +138,19 @@ void BM_RawOccluded(benchmark::State& state) { raw_rays_bench<true>(state); }
 BENCHMARK(BM_RawIntersect)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_RawOccluded)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
 
+// One pass of `spp` samples per pixel at the scene's own maximum depth.
+RenderSettings one_pass(const World& w, int64_t spp) {
+  RenderSettings st;
+  st.spp = spp;
+  st.passes = 1;
+  st.max_depth = w.integrator_defaults().value("max_depth", 10);
+  return st;
+}
+
 void BM_PathTracerSegments(benchmark::State& state) {
   const World& w = scene("cornell-box.json");
   ThreadLimit limit(static_cast<size_t>(state.range(0)));
-  RenderSettings st;
-  st.spp = 4;
-  st.passes = 1;
-  st.max_depth = w.integrator_defaults().value("max_depth", 10);
+  RenderSettings st = one_pass(w, 4);
   RayCounts counts;
   uint64_t seed = 1;
   const double cpu0 = process_cpu_seconds();
@@ -168,10 +174,7 @@ BENCHMARK(BM_PathTracerSegments)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTim
 void BM_PathTracerToRawRatio(benchmark::State& state) {
   const World& w = scene("cornell-box.json");
   ThreadLimit limit(static_cast<size_t>(state.range(0)));
-  RenderSettings st;
-  st.spp = 1;
-  st.passes = 1;
-  st.max_depth = w.integrator_defaults().value("max_depth", 10);
+  RenderSettings st = one_pass(w, 1);
   RayCounts counts;
   double t_raw = 0, t_pt = 0;
   int64_t raw = 0;
@@ -198,10 +201,7 @@ BENCHMARK(BM_PathTracerToRawRatio)->Arg(1)->Arg(2)->ArgName("threads")->UseRealT
 // samples/s of one integrator on one shipped scene at 512 x 512, 1 spp per iteration.
 void integrator_bench(benchmark::State& state, const IntegratorInfo* integ, const std::string& file) {
   const World& w = scene(file, 512);
-  RenderSettings st;
-  st.spp = 1;
-  st.passes = 1;
-  st.max_depth = w.integrator_defaults().value("max_depth", 10);
+  RenderSettings st = one_pass(w, 1);
   uint64_t seed = 1;
   const double cpu0 = process_cpu_seconds();
   for (auto _ : state) {
