@@ -7,6 +7,7 @@
 #include "lib/integrator/light_tracer.h"
 #include "lib/integrator/path_tracer.h"
 #include "lib/mcmc/path_space/mlt.h"
+#include "lib/mcmc/pss/msmlt.h"
 #include "lib/mcmc/pss/pss_driver.h"
 
 namespace tb {
@@ -22,7 +23,7 @@ const std::vector<IntegratorInfo>& integrators() {
          [](const World& w, const RenderSettings& s, Film& f) { return render_bdpt(w, s, f); }},
         {"lt", "light tracing: emitter paths connected to the camera and splatted (importance transport)",
          [](const World& w, const RenderSettings& s, Film& f) { return render_lt(w, s, f); }},
-        {"mlt", "Veach's path-space MLT: bidirectional mutation, lens and caustic perturbations (pinhole; no Dirac vertices)",
+        {"mlt", "Veach's path-space MLT: bidirectional mutation, lens and caustic perturbations through specular chains (pinhole)",
          [](const World& w, const RenderSettings& s, Film& f) { return render_mlt(w, s, f); }},
         {"mmlt", "multiplexed MLT (Hachisuka et al. 2014): primary-sample-space chains per path length over single BDPT techniques",
          [](const World& w, const RenderSettings& s, Film& f) { return render_mmlt(w, s, f); }},
@@ -30,6 +31,12 @@ const std::vector<IntegratorInfo>& integrators() {
          [](const World& w, const RenderSettings& s, Film& f) { return render_pssmlt(w, s, f); }},
         {"pssmlt-pt", "primary sample space MLT (Kelemen et al. 2002) over the path tracer (one NEE+MIS radiance sample per state)",
          [](const World& w, const RenderSettings& s, Film& f) { return render_pssmlt_pt(w, s, f); }},
+        {"msmlt", "multi-stage PSSMLT over BDPT (Hoberock & Hart 2010): target f / I~(pixel), I~ a recursively refined coarse image",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_msmlt(w, s, f); }},
+        {"msmlt-mmlt", "multi-stage MMLT (Hoberock & Hart 2010 target over Hachisuka et al. 2014's per-length chains)",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_msmlt_mmlt(w, s, f); }},
+        {"pssmlt-pt-rescaled", "PSSMLT over the path tracer, small step sigma rescaled by the path's luminance (Szirmay-Kalos & Szecsi 2017)",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_pssmlt_pt_rescaled(w, s, f); }},
         {"pt", "path tracing with next-event estimation, MIS (power heuristic) and Russian roulette",
          [](const World& w, const RenderSettings& s, Film& f) { return render_pt(w, s, f); }},
     };

@@ -1,4 +1,6 @@
 // Primary-sample-space MLT (lib/mcmc/pss/): the lazily updated state against its eager definition,
+// the rescaled small step (lazy ratio = dense density ratio; pairwise balance with its control),
+// the multi-stage guide lookup, msmlt / msmlt over MMLT / rescaled PSSMLT over PT images,
 // the small step's density, pairwise detailed balance of the PSS kernel on the Cornell box target
 // (validate/mcmc/pairwise_balance.h), determinism over thread counts, and image unbiasedness of
 // PSSMLT (over BDPT and over a next-event path tracer) and MMLT against BDPT with Welch's t-test over
@@ -17,10 +19,14 @@
 
 #include "lib/core/parallel.h"
 #include "lib/integrator/bdpt.h"
+#include "lib/integrator/path_tracer.h"
+#include "lib/mcmc/pss/msmlt.h"
 #include "lib/mcmc/pss/pss_driver.h"
 #include "lib/mcmc/pss/pss_kernel.h"
+#include "lib/mcmc/pss/rescaled_step.h"
 #include "lib/path/light_sampler.h"
 #include "lib/scene/scene_loader.h"
+#include "validate/mcmc/broken_variants.h"
 #include "validate/mcmc/pairwise_balance.h"
 #include "validate/render/render_compare.h"
 #include "validate/stats/tests.h"
@@ -246,6 +252,134 @@ TEST(PssKernel, PairwiseDetailedBalanceCornellBox) {
   // the negative controls of this module (dropped rejected splat, dropped technique count).
 }
 
+// ---- rescaled small step (rescaled_step.h) -------------------------------------------------------
+
+// A synthetic sample function whose read set depends on the values read: the camera stream reads
+// 2 + floor(4 u_0) uniforms after its first, the light stream 1 + floor(3 u'_0); the value is
+// smooth and positive, so sigma(x) varies from state to state.
+SampleFunction variable_reads_function() {
+  SampleFunction f;
+  f.sample = [](int, StreamUniforms& u, std::vector<Splat>* out) {
+    u.use_stream(kCameraStream);
+    const double c0 = u.next();
+    double v = 0.1 + c0;
+    for (int i = 0, n = 2 + static_cast<int>(4 * c0); i < n; ++i) v += std::sin(6.0 * u.next());
+    u.use_stream(kLightStream);
+    const double l0 = u.next();
+    for (int i = 0, n = 1 + static_cast<int>(3 * l0); i < n; ++i) v *= 1.0 + u.next();
+    out->push_back({Vec2(0.5, 0.5), Rgb(std::exp(0.5 * v))});
+  };
+  return f;
+}
+
+// The lazy state's ratio (PssState::log_small_step_ratio) against the dense proposal density of
+// RescaledSmallStep on the same x and y, along a chain with accepted and rejected small and large
+// steps; and the moved coordinates: those in D(x) ∩ D(y) by sigma(x), as the density states.
+TEST(PssState, RescaledLazyRatioMatchesDenseDensity) {
+  const SampleFunction f = variable_reads_function();
+  StepRescaling r;
+  r.enabled = true;
+  r.sigma_max = 0.2;
+  const double y_ref = 3.0;
+  const RescaledSmallStep dense(f, 0, kSigma, y_ref, r);
+  const size_t dims = kStreams * 12;
+  PssState s(Rng(7), kSigma);
+  s.set_rescaled(true);
+  std::vector<Splat> sp;
+  auto eval = [&]() {
+    sp.clear();
+    s.restart();
+    f.sample(0, s, &sp);
+    return target_value(sp);
+  };
+  double ix = eval();
+  s.commit_reads();
+  Rng control(8);
+  int compared = 0;
+  for (int it = 0; it < 400; ++it) {
+    const bool large = control.uniform() < 0.2;
+    const double sx = r.sigma(kSigma, y_ref, ix);
+    const auto dx = s.current_reads();
+    s.start_iteration(large, sx);
+    const double iy = eval();
+    if (!large) {
+      const double sy = r.sigma(kSigma, y_ref, iy);
+      const double lazy = s.log_small_step_ratio(sx, sy);
+      // Dense x and y: coordinates in D(x) hold x's values, in D(y) y's; the rest agree.
+      DenseState x(dims, 0.5), y(dims, 0.5);
+      const auto dy = s.reads();
+      for (size_t i = 0; i < dims; ++i) {
+        const size_t j = i / kStreams, st = i % kStreams;
+        const bool in_x = j < dx[st], in_y = j < dy[st];
+        if (in_y) y[i] = s.stored(i);
+        if (in_x) x[i] = in_y ? s.backup(i) : s.stored(i);
+        // Outside D(x) ∩ D(y) the coordinate is read by at most one of them; the other's value
+        // is set equal (its g_sigma0 factor is then the same both ways, and the lazy state may not
+        // hold a materialised value for it: e.g. a never-read coordinate is drawn when first read).
+        if (in_x && !in_y) y[i] = x[i];
+        if (in_y && !in_x) x[i] = y[i];
+      }
+      ASSERT_NEAR(evaluate_dense(f, 0, x).value, ix, 1e-12 * ix);
+      ASSERT_NEAR(evaluate_dense(f, 0, y).value, iy, 1e-12 * iy);
+      const double want = dense.log_density(y, x) - dense.log_density(x, y);
+      if (std::isinf(want))  // g_sigma(y) underflows: a jump of many sigma(y) (both sides say so)
+        ASSERT_EQ(lazy, want) << "iteration " << it;
+      else
+        ASSERT_NEAR(lazy, want, 1e-9 * std::max(1.0, std::abs(want))) << "iteration " << it;
+      ++compared;
+    }
+    if (control.uniform() < 0.5) {
+      s.accept();
+      ix = iy;
+    } else {
+      s.reject();
+    }
+  }
+  EXPECT_GT(compared, 200);
+}
+
+TEST(PssKernel, RescaledSmallStepPairwiseBalanceAndControl) {
+  const SampleFunction f = variable_reads_function();
+  StepRescaling r;
+  r.enabled = true;
+  r.sigma_max = 0.2;
+  const RescaledSmallStep step(f, 0, kSigma, 3.0, r);
+  PssTarget target(f, 0);
+  auto start = [](Uniforms& u) {
+    DenseState x(kStreams * 12);
+    for (double& v : x) v = u.next();
+    return x;
+  };
+  const auto good = mcmc::MetropolisHastings(target, mcmc::SingleProposal(step));
+  const auto rg = mcmc::check_pairwise_balance<decltype(good)>(good, start, 3000, 12, 1);
+  EXPECT_TRUE(rg.passed) << rg.message;
+  const mcmc::MetropolisHastings<PssTarget, mcmc::SingleProposal<RescaledSmallStep>, mcmc::MetropolisRatioOnly> bad(
+      target, mcmc::SingleProposal(step));
+  const auto rb = mcmc::check_pairwise_balance<decltype(bad)>(bad, start, 3000, 12, 1);
+  EXPECT_FALSE(rb.passed) << rb.message;
+  EXPECT_GT(rb.violations, 100);
+}
+
+TEST(MultiStage, GuideLookupAndFloor) {
+  // 4x2 film, factor 2: coarse 2x1 = {mean of left block, mean of right block}.
+  std::vector<Rgb> fine(8, Rgb(0.0));
+  for (int y = 0; y < 2; ++y) {
+    fine[static_cast<size_t>(y * 4 + 0)] = Rgb(2.0);
+    fine[static_cast<size_t>(y * 4 + 1)] = Rgb(6.0);
+  }
+  const GuideImage g(fine, 4, 2, 2, 0.1);
+  ASSERT_EQ(g.coarse_width(), 2);
+  ASSERT_EQ(g.coarse_height(), 1);
+  EXPECT_NEAR(g.coarse()[0], 4.0, 1e-12);
+  EXPECT_NEAR(g.coarse()[1], 0.0, 1e-12);
+  EXPECT_NEAR(g.at(Vec2(1.5, 0.5)), 4.0, 1e-12);
+  EXPECT_NEAR(g.at(Vec2(3.5, 1.5)), 0.1 * 2.0, 1e-12);  // floor: 0.1 * mean (4 + 0) / 2
+  const std::vector<Splat> sp = {{Vec2(0.5, 0.5), Rgb(8.0)}, {Vec2(2.5, 0.5), Rgb(0.4)}};
+  EXPECT_NEAR(g.target(sp), 8.0 / 4.0 + 0.4 / 0.2, 1e-9);
+  const GuideImage empty(std::vector<Rgb>(8, Rgb(0.0)), 4, 2, 2, 0.1);
+  EXPECT_EQ(empty.at(Vec2(0.5, 0.5)), 1.0);  // nothing found: plain PSSMLT target
+}
+
 // Bit-identical results for 1 and 2 threads.
 TEST(PssRender, DeterministicAcrossThreadCounts) {
   const Cornell& c = cornell();
@@ -270,6 +404,24 @@ TEST(PssRender, DeterministicAcrossThreadCounts) {
     const auto a = run(1, mmlt), b = run(2, mmlt);
     ASSERT_EQ(a.size(), b.size());
     for (size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i], b[i]) << "pixel " << i << (mmlt ? " mmlt" : " pssmlt");
+  }
+  // Multi-stage and rescaled variants.
+  auto run2 = [&](size_t threads, bool ms) {
+    ThreadLimit limit(threads);
+    Film film(kRes, kRes);
+    if (ms) {
+      render_msmlt(*c.world, st, p, MultiStageSettings{}, film, nullptr);
+    } else {
+      PssSettings q = p;
+      q.rescale.enabled = true;
+      render_pssmlt_pt(*c.world, st, q, film, nullptr);
+    }
+    return film.welch().sum;
+  };
+  for (bool ms : {false, true}) {
+    const auto a = run2(1, ms), b = run2(2, ms);
+    ASSERT_EQ(a.size(), b.size());
+    for (size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i], b[i]) << "pixel " << i << (ms ? " msmlt" : " rescaled");
   }
 }
 
@@ -371,6 +523,49 @@ TEST(PssRender, PssmltOverRadianceEstimatorUnbiasedAgainstBdpt) {
   std::printf("pssmlt over next-event path tracing, %lld pixels excluded: %s\n  %s\n", static_cast<long long>(excluded),
               cmp.message().c_str(), stats.message().c_str());
 }
+
+// Multi-stage PSSMLT (msmlt.h) and the rescaled PSSMLT over the path tracer against BDPT; the
+// multi-stage negative control splats f / Y(f) instead of f / pi.
+void expect_compare_variant(bool msmlt, PssFault fault, int64_t spp_pass, bool expect_reject, bool over_mmlt = false) {
+  RenderSettings st;
+  st.passes = kPasses;
+  st.spp = kPasses * spp_pass;
+  st.max_depth = kDepth;
+  st.seed = msmlt ? 505 : 606;
+  PssSettings p;
+  p.bootstrap = spp_pass * kRes * kRes / 2;
+  p.chains = 256;
+  p.fault = fault;
+  Film film(kRes, kRes);
+  PssStats stats;
+  if (msmlt) {
+    MultiStageStats ms;
+    if (over_mmlt) {
+      p.bootstrap = 2 * spp_pass * kRes * kRes;  // as for MMLT (render_mcmc)
+      render_msmlt_mmlt(*cornell().world, st, p, MultiStageSettings{}, film, &ms);
+    } else {
+      render_msmlt(*cornell().world, st, p, MultiStageSettings{}, film, &ms);
+    }
+    stats = ms.final_stage;
+  } else {
+    p.rescale.enabled = true;
+    render_pssmlt_pt(*cornell().world, st, p, film, &stats);
+  }
+  int64_t excluded = 0;
+  const ChannelCompare cmp = compare_mcmc(film, bdpt_reference(), spp_pass * kRes * kRes, &excluded);
+  EXPECT_EQ(film.nonfinite().count(), 0);
+  EXPECT_EQ(stats.nonfinite, 0);
+  EXPECT_EQ(cmp.rejects(), expect_reject) << (msmlt ? "msmlt: " : "pssmlt-pt-rescaled: ") << cmp.message();
+  std::printf("%s fault %d, %lld pixels excluded: %s\n  %s\n", msmlt ? "msmlt" : "pssmlt-pt-rescaled",
+              static_cast<int>(fault), static_cast<long long>(excluded), cmp.message().c_str(), stats.message().c_str());
+}
+
+TEST(PssRender, MsmltUnbiasedAgainstBdpt) { expect_compare_variant(true, PssFault::kNone, 64, false); }
+TEST(PssRender, MsmltNegativeControlSplatThroughputIsCaught) {
+  expect_compare_variant(true, PssFault::kSplatThroughput, 16, true);
+}
+TEST(PssRender, MsmltOverMmltUnbiasedAgainstBdpt) { expect_compare_variant(true, PssFault::kNone, 64, false, true); }
+TEST(PssRender, PssmltPtRescaledUnbiasedAgainstBdpt) { expect_compare_variant(false, PssFault::kNone, 64, false); }
 
 TEST(PssRender, PssmltUnbiasedAgainstBdpt) { expect_compare(false, PssFault::kNone, 64, false); }
 TEST(PssRender, MmltUnbiasedAgainstBdpt) { expect_compare(true, PssFault::kNone, 64, false); }

@@ -25,6 +25,31 @@ std::string PssStats::message() const {
                      small_acceptance(), small_accepted, small_proposed, bootstrap_samples, last_b, nonfinite);
 }
 
+double PssStats::visits_cv() const {
+  if (visits.empty()) return 0.0;
+  double sum = 0.0, sq = 0.0;
+  for (double v : visits) sum += v;
+  const double mean = sum / static_cast<double>(visits.size());
+  for (double v : visits) sq += (v - mean) * (v - mean);
+  return mean > 0.0 ? std::sqrt(sq / static_cast<double>(visits.size())) / mean : 0.0;
+}
+
+void PssStats::add(const PssStats& o) {
+  large_proposed += o.large_proposed;
+  large_accepted += o.large_accepted;
+  small_proposed += o.small_proposed;
+  small_accepted += o.small_accepted;
+  mutations += o.mutations;
+  bootstrap_samples += o.bootstrap_samples;
+  zero_passes += o.zero_passes;
+  nonfinite += o.nonfinite;
+  seconds += o.seconds;
+  mutation_seconds += o.mutation_seconds;
+  last_b = o.last_b;
+  if (visits.size() < o.visits.size()) visits.resize(o.visits.size(), 0.0);
+  for (size_t i = 0; i < o.visits.size(); ++i) visits[i] += o.visits[i];
+}
+
 std::vector<double> expected_visits(const std::vector<Rgb>& image, int64_t mutations) {
   double total = 0.0;
   for (const Rgb& c : image) total += luminance(c);
@@ -47,6 +72,12 @@ struct Chain {
   int level = 0;
   std::vector<Splat> current, proposed;
   double i_current = 0.0;
+  double y_current = 0.0;      // target_value of the current splats (kSplatThroughput control)
+  double sigma_current = 0.0;  // rescaled small step: sigma(x)
+  double y_ref = 0.0;          // rescaled small step: Y_ref = b of the chain's group
+  std::vector<std::pair<uint32_t, double>> where;  // visit counts: the current state's pixel shares
+  std::vector<double> visits;
+  int width = 0, height = 0;   // of the film (visit counts)
   double scale = 0.0;  // P b / N of the chain's group: the film weight of a splat v / I
   int64_t remaining = 0;
   uint64_t next_index = 0;  // sample index of the next mutation in the film's logs
@@ -55,11 +86,12 @@ struct Chain {
 
 // Evaluates the sample function. A non-finite target sets *nonfinite (the caller counts it) and
 // reads as 0, like a zero target: the state is never accepted, its splats never reach the film.
-double evaluate(const SampleFunction& f, int level, StreamUniforms& u, std::vector<Splat>* out, bool* nonfinite) {
+double evaluate(const SampleFunction& f, const TargetFunction& target, int level, StreamUniforms& u,
+                std::vector<Splat>* out, bool* nonfinite) {
   out->clear();
   u.restart();
   f.sample(level, u, out);
-  const double i = target_value(*out);
+  const double i = target ? target(*out) : target_value(*out);
   *nonfinite = !std::isfinite(i);
   if (*nonfinite || !(i > 0.0)) {
     out->clear();
@@ -73,15 +105,47 @@ void splat_all(SplatBuffer& buffer, const std::vector<Splat>& splats, double wei
   for (const Splat& s : splats) buffer.splat(s.raster, s.value * weight, index);
 }
 
+// Where a state lies, for visit counts: one unit spread over the pixels of its splats in
+// proportion to each splat's own target value pi({c}) (for PSSMLT its luminance; for multi-stage
+// MLT, Y(v_c / I~(r_c))), i.e. each pixel's share of pi(x) = sum of the shares for a single splat.
+// A state of BDPT splats both at its camera pixel and, through its t = 1 connections, elsewhere.
+void visit_weights(const std::vector<Splat>& splats, const TargetFunction& target, int width, int height,
+                   std::vector<std::pair<uint32_t, double>>* out) {
+  out->clear();
+  double total = 0.0;
+  std::vector<Splat> one(1);
+  for (const Splat& s : splats) {
+    const int x = static_cast<int>(std::floor(s.raster.x)), y = static_cast<int>(std::floor(s.raster.y));
+    if (x < 0 || y < 0 || x >= width || y >= height) continue;
+    one[0] = s;
+    const double w = target ? target(one) : luminance(s.value);
+    if (!(w > 0.0) || !std::isfinite(w)) continue;
+    out->push_back({static_cast<uint32_t>(y * width + x), w});
+    total += w;
+  }
+  for (auto& [pixel, w] : *out) w /= total;
+}
+
 // One mutation of a chain: propose, accept or reject, splat expected values.
 void mutate(const SampleFunction& f, const PssSettings& pss, Chain& c, SplatBuffer& buffer) {
   const bool large = c.control.uniform() < pss.large_step_probability;
-  c.state.start_iteration(large);
+  const bool rescaled = pss.rescale.enabled && !large;
+  c.state.start_iteration(large, c.sigma_current);
   bool nonfinite = false;
-  const double i_prop = evaluate(f, c.level, c.state, &c.proposed, &nonfinite);
+  const double i_prop = evaluate(f, pss.target, c.level, c.state, &c.proposed, &nonfinite);
   c.stats.nonfinite += nonfinite;
-  // Both mutations are symmetric (pss_state.h): T(x -> y) = T(y -> x) cancels in the ratio.
-  const double a = mcmc::HastingsRatio{}(c.i_current, 1.0, i_prop, 1.0);
+  // The large step and the fixed small step are symmetric (pss_state.h): T cancels in the ratio.
+  // The rescaled small step is not: T(y -> x) / T(x -> y) over D(x) ∩ D(y) (rescaled_step.h).
+  double reverse_over_forward = 1.0, sigma_prop = 0.0;
+  if (pss.rescale.enabled && i_prop > 0.0) {
+    sigma_prop = pss.rescale.sigma(pss.sigma, c.y_ref, i_prop);
+    if (rescaled && pss.fault != PssFault::kNoProposalRatio)
+      reverse_over_forward = std::exp(c.state.log_small_step_ratio(c.sigma_current, sigma_prop));
+  }
+  const double a = mcmc::HastingsRatio{}(c.i_current, 1.0, i_prop, reverse_over_forward);
+  // kSplatThroughput: the splat weight 1 / Y(f) instead of 1 / pi (differs only for custom targets).
+  const bool throughput = pss.fault == PssFault::kSplatThroughput;
+  const double y_prop = throughput && i_prop > 0.0 ? target_value(c.proposed) : i_prop;
   mcmc::Transition<const std::vector<Splat>*, int> t;
   t.current = &c.current;
   t.move = 0;
@@ -91,9 +155,9 @@ void mutate(const SampleFunction& f, const PssSettings& pss, Chain& c, SplatBuff
   mcmc::splat_expected(t, [&](const std::vector<Splat>* s, double w) {
     if (s == &c.current) {
       if (pss.fault == PssFault::kNoRejectedSplat) return;
-      splat_all(buffer, c.current, c.scale * w / c.i_current, index);
+      splat_all(buffer, c.current, c.scale * w / (throughput ? c.y_current : c.i_current), index);
     } else {
-      splat_all(buffer, c.proposed, c.scale * w / i_prop, index);
+      splat_all(buffer, c.proposed, c.scale * w / (throughput ? y_prop : i_prop), index);
     }
   });
   const bool accepted = c.control.uniform() < a;
@@ -103,9 +167,13 @@ void mutate(const SampleFunction& f, const PssSettings& pss, Chain& c, SplatBuff
     c.state.accept();
     std::swap(c.current, c.proposed);
     c.i_current = i_prop;
+    c.y_current = y_prop;
+    c.sigma_current = sigma_prop;
+    if (!c.visits.empty()) visit_weights(c.current, pss.target, c.width, c.height, &c.where);
   } else {
     c.state.reject();
   }
+  for (const auto& [pixel, w] : c.where) c.visits[pixel] += w;
   ++c.stats.mutations;
 }
 
@@ -146,13 +214,14 @@ int64_t run_pss(const SampleFunction& f, const RenderSettings& st, const PssSett
   const int64_t P = film.pixel_count();
   const int64_t passes = std::max<int64_t>(1, st.passes);
   const int64_t spp_pass = std::max<int64_t>(1, st.spp / passes);
-  const int64_t N = spp_pass * P;  // mutations per pass
+  const int64_t N = pss.mutations_per_pass > 0 ? pss.mutations_per_pass : spp_pass * P;  // mutations per pass
   const int levels = std::max(1, f.levels);
   const int64_t per_level = std::max<int64_t>(1, (pss.bootstrap + levels - 1) / levels);
   const int64_t boot_n = per_level * levels;
   const int64_t segment = std::max<int64_t>(1, pss.segment);
   const bool resample = pss.resample_levels || levels == 1;
   PssStats total;
+  if (pss.count_visits) total.visits.assign(static_cast<size_t>(P), 0.0);
   std::vector<double> boot(static_cast<size_t>(boot_n)), cdf(static_cast<size_t>(boot_n));
   std::vector<uint8_t> boot_nonfinite(static_cast<size_t>(boot_n));
 
@@ -162,7 +231,7 @@ int64_t run_pss(const SampleFunction& f, const RenderSettings& st, const PssSett
       thread_local std::vector<Splat> sp;
       PssState s(Rng::for_sample(st.seed, key, base + i), pss.sigma);
       bool nonfinite = false;
-      boot[i] = evaluate(f, static_cast<int>(static_cast<int64_t>(i) / per_level), s, &sp, &nonfinite);
+      boot[i] = evaluate(f, pss.target, static_cast<int>(static_cast<int64_t>(i) / per_level), s, &sp, &nonfinite);
       boot_nonfinite[i] = nonfinite;
     });
     total.bootstrap_samples += boot_n;
@@ -219,6 +288,10 @@ int64_t run_pss(const SampleFunction& f, const RenderSettings& st, const PssSett
         const uint64_t gc = static_cast<uint64_t>(pass * C) + ci;
         c.control = Rng::for_sample(st.seed, kChainKey, gc);
         c.stats = {};
+        c.visits.clear();
+        c.where.clear();
+        c.width = film.width();
+        c.height = film.height();
         const double u = c.control.uniform() * weight + base;
         c.remaining = lp.mutations / lp.chains + (static_cast<int64_t>(k) < lp.mutations % lp.chains ? 1 : 0);
         c.next_index = gc << 32;  // film reproducer: (pass * chains + chain) * 2^32 + mutation
@@ -232,9 +305,20 @@ int64_t run_pss(const SampleFunction& f, const RenderSettings& st, const PssSett
         const int64_t j = std::min<int64_t>(it - cdf.begin(), hi - 1);
         c.level = static_cast<int>(j / per_level);
         c.state = PssState(Rng::for_sample(st.seed, kBootstrapKey, boot_base + static_cast<uint64_t>(j)), pss.sigma);
+        c.state.set_rescaled(pss.rescale.enabled);
         bool nonfinite = false;  // sample j was finite in the bootstrap: regenerated exactly
-        c.i_current = evaluate(f, c.level, c.state, &c.current, &nonfinite);
+        c.i_current = evaluate(f, pss.target, c.level, c.state, &c.current, &nonfinite);
+        c.state.commit_reads();
         c.state.set_rng(Rng::for_sample(st.seed, kStateKey, gc));
+        c.y_current = pss.fault == PssFault::kSplatThroughput ? target_value(c.current) : c.i_current;
+        // Y_ref of the rescaled step: b of the group per level (b_group / levels would do as well;
+        // any fixed positive value keeps the kernel valid).
+        c.y_ref = b_group;
+        c.sigma_current = pss.rescale.enabled ? pss.rescale.sigma(pss.sigma, c.y_ref, c.i_current) : 0.0;
+        if (pss.count_visits) {
+          c.visits.assign(static_cast<size_t>(P), 0.0);
+          visit_weights(c.current, pss.target, film.width(), film.height(), &c.where);
+        }
       });
     }
     // 3. Mutations, in segments whose splat buffers are merged in chain order.
@@ -260,6 +344,7 @@ int64_t run_pss(const SampleFunction& f, const RenderSettings& st, const PssSett
       total.small_accepted += c.stats.small_accepted;
       total.mutations += c.stats.mutations;
       total.nonfinite += c.stats.nonfinite;
+      for (size_t i = 0; i < c.visits.size(); ++i) total.visits[i] += c.visits[i];
     }
     // 4. The splats carry their group's scale P b / N already.
     film.end_pass(1.0);
@@ -277,17 +362,17 @@ int64_t run_pss(const SampleFunction& f, const RenderSettings& st, const PssSett
 
 }  // namespace pss
 
-namespace {
+namespace pss {
 
-void report_pss(const pss::PssStats& s, RunReport* report) {
+void fill_report(const PssStats& s, RunReport* report, const char* small_step_name) {
   if (!report) return;
   report->mutations = {{"large step", s.large_proposed, s.large_accepted},
-                       {"small step", s.small_proposed, s.small_accepted}};
+                       {small_step_name, s.small_proposed, s.small_accepted}};
   report->mutations_total = s.mutations;
   report->mutations_per_second = s.mutations_per_second();
 }
 
-}  // namespace
+}  // namespace pss
 
 int64_t render_pssmlt(const World& world, const RenderSettings& settings, const pss::PssSettings& p, Film& film,
                       pss::PssStats* stats) {
@@ -320,7 +405,7 @@ int64_t render_pssmlt(const World& world, const RenderSettings& settings, Film& 
   pss::PssSettings p;
   pss::PssStats stats;
   const int64_t passes = render_pssmlt(world, settings, p, film, &stats);
-  report_pss(stats, settings.report);
+  pss::fill_report(stats, settings.report);
   return passes;
 }
 
@@ -328,7 +413,7 @@ int64_t render_pssmlt_pt(const World& world, const RenderSettings& settings, Fil
   pss::PssSettings p;
   pss::PssStats stats;
   const int64_t passes = render_pssmlt_pt(world, settings, p, film, &stats);
-  report_pss(stats, settings.report);
+  pss::fill_report(stats, settings.report);
   return passes;
 }
 
@@ -336,7 +421,16 @@ int64_t render_mmlt(const World& world, const RenderSettings& settings, Film& fi
   pss::PssSettings p;
   pss::PssStats stats;
   const int64_t passes = render_mmlt(world, settings, p, film, &stats);
-  report_pss(stats, settings.report);
+  pss::fill_report(stats, settings.report);
+  return passes;
+}
+
+int64_t render_pssmlt_pt_rescaled(const World& world, const RenderSettings& settings, Film& film) {
+  pss::PssSettings p;
+  p.rescale.enabled = true;
+  pss::PssStats stats;
+  const int64_t passes = render_pssmlt_pt(world, settings, p, film, &stats);
+  pss::fill_report(stats, settings.report, "rescaled small step");
   return passes;
 }
 

@@ -21,6 +21,9 @@
 //      splat_expected), each splat value v divided by I and multiplied by its group's
 //      P b_group / N_group (P pixels; derivation in docs/mlt-pss.md, "Normalisation");
 //   4. end_pass(1): the splats carry their scale.
+// Options: a custom target pi (PssSettings::target; splats are then v / pi, b = mean of pi, used by
+// the multi-stage driver msmlt.h) and the rescaled small step (PssSettings::rescale, rescaled_step.h:
+// sigma(x) from pi(x), acceptance with the ratio T(y -> x) / T(x -> y) of PssState::log_small_step_ratio).
 //
 // Determinism: bootstrap sample j of pass p uses Rng::for_sample(seed, key_bootstrap, p * L * M
 // + j); chain c of pass p uses Rng::for_sample(seed, key_chain, p * C + c) for its decisions and
@@ -36,6 +39,7 @@
 #include "lib/film/film.h"
 #include "lib/integrator/render_settings.h"
 #include "lib/mcmc/pss/pss_sample.h"
+#include "lib/mcmc/pss/rescaled_step.h"
 #include "lib/scene/world.h"
 
 namespace tb {
@@ -47,7 +51,13 @@ enum class PssFault {
   kNone,
   kNoRejectedSplat,  // expected-value splatting without the (1 - a) splat of the current state
   kNoTechniqueCount, // MMLT without the factor k + 1 (number of techniques) in the target
+  kNoProposalRatio,  // rescaled small step accepted without T(y -> x) / T(x -> y)
+  kSplatThroughput,  // splats f / Y(f) instead of f / pi (a custom target forgetting its weight)
 };
+
+// The chain's scalar target pi(u) from the splats of a state (empty: target_value, the luminance
+// of the sum). Any pi > 0 wherever a splat is non-zero keeps the estimator unbiased (msmlt.h).
+using TargetFunction = std::function<double(const std::vector<Splat>&)>;
 
 struct PssSettings {
   double large_step_probability = 0.3;  // Kelemen et al. 2002, Sec. 5.3 (pbrt-v3 default 0.3)
@@ -61,6 +71,11 @@ struct PssSettings {
   bool resample_levels = false;
   PssFault fault = PssFault::kNone;
   bool print_stats = false;             // acceptance rates and mutations/s to stderr
+  // Small-step sigma rescaled by the current target value (rescaled_step.h), Y_ref = b of the pass.
+  StepRescaling rescale;
+  TargetFunction target;                // empty: luminance of the splat sum
+  int64_t mutations_per_pass = 0;       // > 0: replaces spp per pass * pixels (multi-stage guides)
+  bool count_visits = false;            // PssStats::visits: per pixel, mutations whose state lies there
 };
 
 struct PssStats {
@@ -73,6 +88,15 @@ struct PssStats {
   double seconds = 0.0;     // wall time of the whole run, bootstrap included
   double mutation_seconds = 0.0;  // wall time of the chains' mutations only
   double last_b = 0.0;      // b of the last pass
+  // With PssSettings::count_visits: per pixel (y * width + x), the mutations after which the
+  // chain's state lies in it, summed over passes; a state spreads its one unit over the pixels of
+  // its splats in proportion to each splat's own target value (for BDPT: the camera pixel and the
+  // pixels its t = 1 connections reach).
+  std::vector<double> visits;
+  // Coefficient of variation (standard deviation / mean) of visits over the pixels.
+  double visits_cv() const;
+  // Adds the counts of another run (visits summed, wall times added, b of `o`).
+  void add(const PssStats& o);
   double large_acceptance() const { return large_proposed ? double(large_accepted) / double(large_proposed) : 0.0; }
   double small_acceptance() const { return small_proposed ? double(small_accepted) / double(small_proposed) : 0.0; }
   // Mutations per second of the mutation phase (bootstrap and chain starts excluded).
@@ -91,6 +115,9 @@ std::vector<double> expected_visits(const std::vector<Rgb>& image, int64_t mutat
 int64_t run_pss(const SampleFunction& f, const RenderSettings& settings, const PssSettings& pss, Film& film,
                 PssStats* stats = nullptr);
 
+// Fills the RunReport of `tb render` (nothing if report is null): acceptance per mutation type.
+void fill_report(const PssStats& s, RunReport* report, const char* small_step_name = "small step");
+
 }  // namespace pss
 
 // The registered renderers (default PssSettings; acceptance rates printed to stderr).
@@ -106,5 +133,7 @@ int64_t render_pssmlt(const World& world, const RenderSettings& settings, const 
                       pss::PssStats* stats);
 int64_t render_mmlt(const World& world, const RenderSettings& settings, const pss::PssSettings& pss, Film& film,
                     pss::PssStats* stats);
+// PSSMLT over the path tracer with the small step rescaled by the path's luminance (rescaled_step.h).
+int64_t render_pssmlt_pt_rescaled(const World& world, const RenderSettings& settings, Film& film);
 
 }  // namespace tb

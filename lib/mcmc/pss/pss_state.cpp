@@ -1,5 +1,6 @@
 #include "lib/mcmc/pss/pss_state.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -25,14 +26,31 @@ double wrap01(double x) {
 
 PssState::PssState(Rng rng, double sigma) : rng_(rng), sigma_(sigma) {}
 
-void PssState::start_iteration(bool large_step) {
+void PssState::start_iteration(bool large_step, double sigma_shared) {
   ++iteration_;
   large_ = large_step;
+  sigma_shared_ = sigma_shared;
   restart();
 }
 
 void PssState::accept() {
   if (large_) last_large_ = iteration_;
+  commit_reads();
+}
+
+double PssState::log_small_step_ratio(double sigma_x, double sigma_y) const {
+  double log_ratio = 0.0;
+  for (int s = 0; s < kStreams; ++s) {
+    const size_t shared = std::min(current_reads_[static_cast<size_t>(s)], index_[static_cast<size_t>(s)]);
+    for (size_t j = 0; j < shared; ++j) {
+      // In D(x) ∩ D(y): modified in this iteration, backup_value is x_i (x read it at iteration n,
+      // so it carried no pending steps), value is y_i. g is even, so one difference serves both.
+      const Coordinate& c = x_[j * kStreams + static_cast<size_t>(s)];
+      const double d = c.value - c.backup_value;
+      log_ratio += std::log(wrapped_normal_pdf(d, sigma_y)) - std::log(wrapped_normal_pdf(d, sigma_x));
+    }
+  }
+  return log_ratio;
 }
 
 void PssState::reject() {
@@ -62,6 +80,10 @@ void PssState::ensure_ready(size_t i) {
   }
   if (large_) {
     c.value = rng_.uniform();
+  } else if (rescaled_ && i / kStreams < current_reads_[i % kStreams]) {
+    // In D(x) (and now read by y): x read it at iteration n = iteration_ - 1, so exactly this
+    // iteration's step is pending, with the rescaled sigma(x).
+    c.value = wrap01(c.value + sigma_shared_ * gaussian());
   } else {
     const int64_t n_small = iteration_ - c.modified;  // accepted small steps, this one included
     if (n_small > 0) c.value = wrap01(c.value + sigma_ * std::sqrt(static_cast<double>(n_small)) * gaussian());

@@ -24,6 +24,18 @@
 // wrapped Gaussian of sigma sqrt(n_small), then (3) the current iteration's mutation. A rejected
 // iteration restores every coordinate modified in it and does not count as an iteration, so the
 // gap counts accepted iterations only, exactly as an eagerly updated state would.
+//
+// Rescaled small step (Szirmay-Kalos & Szecsi 2017 as described by Zirr & Dachsbacher 2020,
+// Sec. 8: an isotropic step whose sigma depends on the current path; docs/mlt-pss.md, "Step
+// rescaling"). With set_rescaled(true), a small step perturbs by sigma(x) (passed to
+// start_iteration) exactly the coordinates read by the current state x AND by the proposal y,
+// D(x) ∩ D(y); every other coordinate moves by the fixed sigma (lazily, as above). The set
+// D(x) ∩ D(y) is symmetric in (x, y), and whether the proposal reads a coordinate is decided by the
+// coordinates it read before, so this is a proper proposal with density
+//   T(x -> y) = prod_{i in D(x) ∩ D(y)} g_{sigma(x)}(y_i - x_i) * prod_{i not in it} g_sigma(y_i - x_i)
+// and T(y -> x) / T(x -> y) = prod_{i in D(x) ∩ D(y)} g_{sigma(y)}(x_i - y_i) / g_{sigma(x)}(y_i - x_i)
+// (the fixed-sigma factors, over infinitely many coordinates, cancel pairwise): log_small_step_ratio.
+// D(x) is a prefix of each stream (commit_reads / accept record how far x read each stream).
 #pragma once
 
 #include <array>
@@ -58,9 +70,22 @@ class PssState final : public StreamUniforms {
   PssState(Rng rng, double sigma);
 
   // Starts proposing: iteration n + 1 with a large or a small step. Rewinds the streams.
-  void start_iteration(bool large_step);
-  // Keeps the proposal (a large step then resets untouched coordinates when they are next read).
+  // sigma_shared: the rescaled small step's sigma(x) for D(x) ∩ D(y) (ignored unless rescaled).
+  void start_iteration(bool large_step, double sigma_shared = 0.0);
+  // Keeps the proposal (a large step then resets untouched coordinates when they are next read);
+  // records the proposal's reads as D(x) of the new current state (commit_reads).
   void accept();
+  // Records how far the current state read each stream (its D(x)); call after evaluating the
+  // initial state.
+  void commit_reads() { current_reads_ = index_; }
+  // Rescaled small step (see the top of this file). While proposing y (after evaluating it):
+  //   log T(y -> x) / T(x -> y) = sum_{i in D(x) ∩ D(y)} log g_{sigma_y}(x_i - y_i) - log g_{sigma_x}(y_i - x_i).
+  void set_rescaled(bool on) { rescaled_ = on; }
+  bool rescaled() const { return rescaled_; }
+  double log_small_step_ratio(double sigma_x, double sigma_y) const;
+  // Coordinates read from each stream since the last restart (the proposal's D(y) once evaluated).
+  const std::array<size_t, kStreams>& reads() const { return index_; }
+  const std::array<size_t, kStreams>& current_reads() const { return current_reads_; }
   // Restores every coordinate the proposal changed and returns to iteration n.
   void reject();
 
@@ -80,6 +105,8 @@ class PssState final : public StreamUniforms {
   // Current value of coordinate i, as stored (not brought up to date).
   double stored(size_t i) const { return x_[i].value; }
   int64_t last_modified(size_t i) const { return x_[i].modified; }
+  // Value of coordinate i before the current iteration modified it (meaningful when it did).
+  double backup(size_t i) const { return x_[i].backup_value; }
   double sigma() const { return sigma_; }
 
  private:
@@ -100,6 +127,9 @@ class PssState final : public StreamUniforms {
   bool large_ = false;      // iteration 0 is the initial draw: no mutation applied
   int stream_ = 0;
   std::array<size_t, kStreams> index_{};
+  bool rescaled_ = false;
+  double sigma_shared_ = 0.0;                       // sigma(x) of the current rescaled small step
+  std::array<size_t, kStreams> current_reads_{};    // D(x): coordinates per stream the current state read
 };
 
 // A fixed state u in [0,1)^n, read through the same stream layout (coordinate i * kStreams + s).
@@ -111,6 +141,7 @@ class DenseStreams final : public StreamUniforms {
   void use_stream(int stream) override { stream_ = stream; }
   void restart() override { index_.fill(0); }
   size_t max_read() const { return max_read_; }  // 1 + the largest coordinate read
+  const std::array<size_t, kStreams>& reads() const { return index_; }  // per stream, since restart
 
  private:
   const std::vector<double>* u_;
