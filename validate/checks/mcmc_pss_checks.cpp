@@ -23,7 +23,7 @@
 // render.{pssmlt,mmlt}.negative_control.<defect> (passing when the broken variant IS rejected),
 // mcmc.pss.cornell.{pssmlt,pssmlt_pt}.rescaled_small_step.pairwise, mcmc.pss.negative_control.rescaled_no_ratio.pairwise,
 // render.{msmlt,pssmlt_pt_rescaled}.cornell.unbiased, render.msmlt.negative_control.splat_throughput,
-// render.msmlt.cornell.visits_cv.
+// render.msmlt.cornell.visits_cv, render.{pssmlt,mmlt,msmlt,pssmlt_pt_rescaled}.{glossy,caustic}.unbiased.
 #include <map>
 #include <memory>
 #include <mutex>
@@ -56,11 +56,13 @@ constexpr double kMinVisits = 32;   // expected mutations per pixel and pass to 
 constexpr size_t kPerStream = 40;   // uniforms per stream of the dense check states (max_depth 3 reads < 40)
 
 struct CornellBox {
+  std::string file;
   std::unique_ptr<World> world;
   std::unique_ptr<LightSampler> sampler;
   PathContext ctx;
-  explicit CornellBox(int res)
-      : world(load_scene_at_resolution("cornell-box.json", res, res)),
+  explicit CornellBox(int res, std::string scene = "cornell-box.json")
+      : file(std::move(scene)),
+        world(load_scene_at_resolution(file, res, res)),
         sampler(std::make_unique<LightSampler>(*world)),
         ctx{world.get(), sampler.get()} {}
 };
@@ -212,8 +214,13 @@ struct ImageSize {
   int64_t passes, ref_spp_pass, spp_pass;
 };
 
-ImageSize image_size(const CheckContext& ctx) {
-  ImageSize s = ctx.full ? ImageSize{24, 64, 256, 128} : ImageSize{16, 32, 96, 64};
+// The Cornell box at 16 x 16 (quick) / 24 x 24 (full); the glossy and caustic scenes, whose
+// checks repeat every variant, at 8 x 8 / 16 x 16 with more mutations per pixel (their light is
+// concentrated in fewer pixels).
+ImageSize image_size(const CheckContext& ctx, const std::string& scene = "cornell-box.json") {
+  const bool cornell = scene == "cornell-box.json";
+  ImageSize s = cornell ? (ctx.full ? ImageSize{24, 64, 256, 128} : ImageSize{16, 32, 96, 64})
+                        : (ctx.full ? ImageSize{16, 64, 512, 256} : ImageSize{8, 32, 256, 128});
   s.ref_spp_pass = static_cast<int64_t>(double(s.ref_spp_pass) * ctx.sample_scale);
   s.spp_pass = static_cast<int64_t>(double(s.spp_pass) * ctx.sample_scale);
   return s;
@@ -222,15 +229,15 @@ ImageSize image_size(const CheckContext& ctx) {
 // The BDPT reference, rendered once per (size, seed) and shared by the image checks.
 std::shared_ptr<const Film> bdpt_reference(const CornellBox& box, const ImageSize& sz, uint64_t seed) {
   static std::mutex mu;
-  static std::map<std::tuple<int, int64_t, int64_t, uint64_t>, std::shared_ptr<const Film>> cache;
-  const auto key = std::make_tuple(sz.res, sz.passes, sz.ref_spp_pass, seed);
+  static std::map<std::tuple<std::string, int, int64_t, int64_t, uint64_t>, std::shared_ptr<const Film>> cache;
+  const auto key = std::make_tuple(box.file, sz.res, sz.passes, sz.ref_spp_pass, seed);
   std::lock_guard<std::mutex> lock(mu);
   if (auto it = cache.find(key); it != cache.end()) return it->second;
   RenderSettings st;
   st.passes = sz.passes;
   st.spp = sz.passes * sz.ref_spp_pass;
   st.max_depth = kMaxDepth;
-  st.seed = hash_values(seed, hash_string("render.pss.bdpt_reference"));
+  st.seed = hash_values(seed, hash_string("render.pss.bdpt_reference"), hash_string(box.file));
   auto film = std::make_shared<Film>(sz.res, sz.res);
   render_bdpt(*box.world, st, *film);
   cache[key] = film;
@@ -239,12 +246,13 @@ std::shared_ptr<const Film> bdpt_reference(const CornellBox& box, const ImageSiz
 
 enum class Variant { kPssmlt, kMmlt, kMsmlt, kPssmltPtRescaled };
 
-CheckResult run_image(const CheckContext& ctx, Variant variant, PssFault fault, const std::string& name) {
+CheckResult run_image(const CheckContext& ctx, Variant variant, PssFault fault, const std::string& name,
+                      const std::string& scene = "cornell-box.json") {
   const bool mmlt = variant == Variant::kMmlt;
-  ImageSize sz = image_size(ctx);
+  ImageSize sz = image_size(ctx, scene);
   if (fault != PssFault::kNone) sz.spp_pass = std::max<int64_t>(8, sz.spp_pass / 4);  // caught by far
   if (fault == PssFault::kSplatThroughput) sz.spp_pass = std::max<int64_t>(4, sz.spp_pass / 2);  // +700%: by far
-  const CornellBox box(sz.res);
+  const CornellBox box(sz.res, scene);
   const auto ref = bdpt_reference(box, sz, ctx.seed);
   RenderSettings st;
   st.passes = sz.passes;
@@ -287,7 +295,7 @@ CheckResult run_image(const CheckContext& ctx, Variant variant, PssFault fault, 
                            visits.size(), kMinVisits, stats.message());
   r.details["excluded_pixels"] = excluded;
   r.details["fault"] = static_cast<int>(fault);
-  r.details["settings"] = {{"resolution", sz.res}, {"passes", sz.passes}, {"mutations_per_pixel_per_pass", sz.spp_pass},
+  r.details["settings"] = {{"scene", scene}, {"resolution", sz.res}, {"passes", sz.passes}, {"mutations_per_pixel_per_pass", sz.spp_pass},
                            {"reference_spp_per_pass", sz.ref_spp_pass}, {"max_depth", kMaxDepth},
                            {"seed", st.seed}, {"chains_per_pass", p.chains}, {"bootstrap", p.bootstrap},
                            {"large_step_probability", p.large_step_probability}, {"sigma", p.sigma},
@@ -410,6 +418,21 @@ const bool registered = [] {
                                    return run_image(ctx, variant, fault, name);
                                  }});
   }
+  // Every variant on the glossy and the caustic scene too (issue: Cornell box, glossy, caustic).
+  for (const char* scene : {"glossy", "caustic"})
+    for (auto [variant, label] : {std::pair{Variant::kPssmlt, "pssmlt"}, std::pair{Variant::kMmlt, "mmlt"},
+                                  std::pair{Variant::kMsmlt, "msmlt"},
+                                  std::pair{Variant::kPssmltPtRescaled, "pssmlt_pt_rescaled"}}) {
+      const std::string name = fmt::format("render.{}.{}.unbiased", label, scene);
+      const std::string file = std::string(scene) + ".json";
+      const Variant v = variant;
+      Registry::global().add(Check{
+          .name = name,
+          .description = fmt::format("{} against BDPT on the {} scene, Welch t-test per pixel over independent passes",
+                                     label, scene),
+          .kind = CheckKind::kStatistical,
+          .run = [name, v, file](const CheckContext& ctx) { return run_image(ctx, v, PssFault::kNone, name, file); }});
+    }
   for (auto [pt, no_ratio] : {std::pair{false, false}, std::pair{true, false}, std::pair{false, true}}) {
     const std::string name = no_ratio ? "mcmc.pss.negative_control.rescaled_no_ratio.pairwise"
                                       : fmt::format("mcmc.pss.cornell.{}.rescaled_small_step.pairwise", pt ? "pssmlt_pt" : "pssmlt");
