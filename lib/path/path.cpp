@@ -4,6 +4,7 @@
 
 #include "estimators/mis_heuristics.h"
 #include "lib/geometry/spawn.h"
+#include "lib/path/dirac.h"
 #include "lib/path/measure.h"
 #include "lib/path/scattering.h"
 
@@ -104,7 +105,8 @@ Rgb emitted(const PathVertex& x0, const PathVertex& x1) {
   return x0.light->le(x0.hit.n, direction(x0, x1));
 }
 
-Rgb measurement_contribution(const PathContext& ctx, std::span<const PathVertex> x, bool test_visibility) {
+Rgb measurement_contribution(const PathContext& ctx, std::span<const PathVertex> x, bool test_visibility,
+                             DiracPolicy dirac) {
   const size_t k = x.size() - 1;
   if (x.size() < 2 || x[k].kind != VertexKind::kCamera) return Rgb(0.0);
   const Scene& scene = ctx.world->geometry();
@@ -137,6 +139,10 @@ Rgb measurement_contribution(const PathContext& ctx, std::span<const PathVertex>
       if (blocked) return Rgb(0.0);
     }
     if (i + 1 < k) {  // scattering at b, radiance form: wo towards the camera, wi towards the light
+      if (dirac != DiracPolicy::kZero && is_dirac_surface(b)) {
+        f *= dirac_f(b, direction(b, x[i + 2]), direction(b, a));
+        continue;
+      }
       if (!b.bsdf || b.delta) return Rgb(0.0);
       f *= SurfaceScatter(b.hit, *b.bsdf).f(direction(b, x[i + 2]), direction(b, a), TransportMode::kRadiance);
     }
@@ -145,7 +151,13 @@ Rgb measurement_contribution(const PathContext& ctx, std::span<const PathVertex>
   return f * we;
 }
 
-PathDensities path_densities(const PathContext& ctx, std::span<const PathVertex> x) {
+PathDensities path_densities(const PathContext& ctx, std::span<const PathVertex> x, DiracPolicy dirac) {
+  const DiracLobeChoice choice =
+      dirac == DiracPolicy::kCoefficientKeptLobe ? DiracLobeChoice::kKept : DiracLobeChoice::kSampled;
+  const auto step = [&](const PathVertex* prev, const PathVertex& cur, const PathVertex& next, TransportMode mode) {
+    return dirac == DiracPolicy::kZero ? pdf_next(ctx, prev, cur, next, mode)
+                                       : pdf_next_dirac(ctx, prev, cur, next, mode, choice);
+  };
   const size_t n = x.size(), k = n - 1;
   PathDensities d;
   d.pL.assign(n, 0.0);
@@ -155,10 +167,10 @@ PathDensities path_densities(const PathContext& ctx, std::span<const PathVertex>
   for (size_t i = 0; i < n; ++i) d.delta[i] = x[i].delta ? 1 : 0;
   d.pL[0] = pdf_light_origin(ctx, x[0]);
   if (k >= 1 && x[1].kind != VertexKind::kCamera) d.pL[1] = pdf_light_next(x[0], x[1]);
-  for (size_t i = 2; i < k; ++i) d.pL[i] = pdf_next(ctx, &x[i - 2], x[i - 1], x[i], TransportMode::kImportance);
+  for (size_t i = 2; i < k; ++i) d.pL[i] = step(&x[i - 2], x[i - 1], x[i], TransportMode::kImportance);
   d.pE[k] = ctx.world->camera().pdf_we(Ray{x[k].hit.p, direction(x[k], x[k - 1])}).pos;
   d.pE[k - 1] = pdf_next(ctx, nullptr, x[k], x[k - 1], TransportMode::kRadiance);
-  for (size_t i = k - 1; i-- > 0;) d.pE[i] = pdf_next(ctx, &x[i + 2], x[i + 1], x[i], TransportMode::kRadiance);
+  for (size_t i = k - 1; i-- > 0;) d.pE[i] = step(&x[i + 2], x[i + 1], x[i], TransportMode::kRadiance);
   return d;
 }
 

@@ -98,11 +98,22 @@ Rgb emitted(const PathVertex& x0, const PathVertex& x1);
 
 // --- Whole-path evaluation (for paths given, not only sampled) ---------------------------------
 
+// How the Dirac (specular) vertices of a given path are evaluated. kZero: f = 0 at a Dirac vertex
+// and its densities stored as 0 (read as 1 in MIS ratios): the convention of BDPT and its MIS
+// weights. kCoefficient / kCoefficientKeptLobe: the delta dropped from f and from the densities
+// alike (lib/path/dirac.h), the densities with / without the lobe-selection probability: the
+// convention of path-space MLT (lib/mcmc/path_space).
+enum class DiracPolicy : uint8_t { kZero, kCoefficient, kCoefficientKeptLobe };
+
 // f(X) for X = x_0 .. x_k (x_0 a light vertex or an emitting surface, x_k the camera).
 // test_visibility: trace shadow rays for every segment (MCMC proposals); the integrators'
 // sampled segments are visible by construction. The camera factor is the importance with the
 // whole-image normalisation of docs/camera.md.
-Rgb measurement_contribution(const PathContext& ctx, std::span<const PathVertex> x, bool test_visibility);
+// dirac: kZero returns 0 for a path with a Dirac surface vertex; otherwise the Dirac vertex
+// contributes its lobe coefficient (dirac.h: dirac_f), 0 when no lobe maps one neighbour onto the
+// other.
+Rgb measurement_contribution(const PathContext& ctx, std::span<const PathVertex> x, bool test_visibility,
+                             DiracPolicy dirac = DiracPolicy::kZero);
 
 struct PathDensities {
   std::vector<double> pL, pE;  // per vertex, see the top of this file
@@ -110,8 +121,10 @@ struct PathDensities {
   bool x0_infinite = false;    // x_0 is a direction (infinite light)
   size_t size() const { return pL.size(); }
 };
-// pL and pE of every vertex of X, evaluated from scratch.
-PathDensities path_densities(const PathContext& ctx, std::span<const PathVertex> x);
+// pL and pE of every vertex of X, evaluated from scratch. dirac != kZero: the density of a vertex
+// sampled through a Dirac vertex is the pseudo density of dirac.h (pdf_next_dirac) instead of 0.
+PathDensities path_densities(const PathContext& ctx, std::span<const PathVertex> x,
+                             DiracPolicy dirac = DiracPolicy::kZero);
 // p_{s,t}(X), t = k + 1 - s; 0 for a technique that cannot sample X (t >= 1).
 double technique_density(const PathDensities& d, int s);
 // q_j / q_s for j = 0..k (0 where technique j cannot sample X); q_t=0 excluded.

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "lib/mcmc/path_space/subpath_step.h"
+#include "lib/path/dirac.h"
 #include "lib/path/measure.h"
 
 namespace tb::path_space {
@@ -29,9 +30,20 @@ bool x0_deletable(const MltPath& x) {
   const PathVertex& v = x.v[0];
   return !(v.light && (v.light->flags() & light_flags::kDeltaPosition));
 }
-// Lowest l for kd deleted edges, and the number of positions l = lo .. k - kd.
+// Lowest l for kd deleted edges.
 int lowest_l(const MltPath& x, int kd) { return (kd >= 2 && x0_deletable(x)) ? -1 : 0; }
-int positions(const MltPath& x, int kd) { return std::max(0, x.segments() - kd - lowest_l(x, kd) + 1); }
+// Kept ends must not be Dirac vertices: a subpath extended from a kept mirror or glass vertex would
+// retrace the deleted vertex (the same point, or the other lobe), so the deleted and the added
+// vertices could not be told apart; no connection can be made at such an end either.
+bool ends_ok(const MltPath& x, int l, int m) {
+  return (l < 0 || !is_dirac_surface(x.v[l])) && !is_dirac_surface(x.v[m]);
+}
+// The number of valid positions l = lo .. k - kd.
+int positions(const MltPath& x, int kd) {
+  int n = 0;
+  for (int l = lowest_l(x, kd); l <= x.segments() - kd; ++l) n += ends_ok(x, l, l + kd) ? 1 : 0;
+  return n;
+}
 
 // The solid-angle-to-area factor |cos_to| / d^2 of a step (negative control only).
 double area_factor(const PathVertex& from, const PathVertex& to) {
@@ -43,7 +55,7 @@ double area_factor(const PathVertex& from, const PathVertex& to) {
 
 double BidirectionalMutation::deletion_probability(const MltPath& x, int l, int m) const {
   const int k = x.segments(), kd = m - l;
-  if (k < 1 || kd < 1 || m > k || l < lowest_l(x, kd)) return 0.0;
+  if (k < 1 || kd < 1 || m > k || l < lowest_l(x, kd) || !ends_ok(x, l, m)) return 0.0;
   double norm = 0.0;
   for (int d = 1; d <= k + 1; ++d)
     if (positions(x, d) > 0) norm += deletion_weight(d);
@@ -103,16 +115,22 @@ double BidirectionalMutation::split_density(const MltPath& y, int l, int na, int
       p *= pdf_light_origin(*ctx_, v[0]);
       continue;
     }
-    double pi = pdf_next(*ctx_, i >= 2 ? &v[i - 2] : nullptr, v[i - 1], v[i], TransportMode::kImportance);
+    double pi = pdf_next_dirac(*ctx_, i >= 2 ? &v[i - 2] : nullptr, v[i - 1], v[i], TransportMode::kImportance);
     if (no_geometry) pi /= area_factor(v[i - 1], v[i]);
     p *= pi;
   }
   for (int i = l + s + 1; i <= l + na; ++i) {  // camera side: sampled from y_{i+1} (and y_{i+2})
-    double pi = pdf_next(*ctx_, i + 2 <= ky ? &v[i + 2] : nullptr, v[i + 1], v[i], TransportMode::kRadiance);
+    double pi = pdf_next_dirac(*ctx_, i + 2 <= ky ? &v[i + 2] : nullptr, v[i + 1], v[i], TransportMode::kRadiance);
     if (no_geometry) pi /= area_factor(v[i + 1], v[i]);
     p *= pi;
   }
   return p;
+}
+
+bool BidirectionalMutation::split_connectible(const MltPath& y, int l, int s) const {
+  const int c = l + s;  // y_c (light end) -- y_{c+1} (camera end) is the connecting edge
+  if (c < 0) return !is_dirac_surface(y.v[0]);  // the camera subpath reached the emitter
+  return !is_dirac_surface(y.v[c]) && !is_dirac_surface(y.v[c + 1]);
 }
 
 double BidirectionalMutation::density(const MltPath& x, const MltPath& y) const {
@@ -125,7 +143,8 @@ double BidirectionalMutation::density(const MltPath& x, const MltPath& y) const 
   const std::vector<int> splits = valid_splits(x, *w);
   if (splits.empty()) return 0.0;
   double sum = 0.0;  // Veach 1997, Sec. 11.4.2.1: every split (s', t') that can produce y
-  for (int s : splits) sum += split_density(y, w->l, w->na(), s);
+  for (int s : splits)
+    if (split_connectible(y, w->l, s)) sum += split_density(y, w->l, w->na(), s);
   return pd * pa * sum / static_cast<double>(splits.size());
 }
 
@@ -174,6 +193,9 @@ std::optional<MltPath> BidirectionalMutation::propose_way(const MltPath& x, cons
   for (auto it = C.rbegin(); it != C.rend(); ++it) y.v.push_back(*it);
   for (int i = w.m; i <= k; ++i) y.v.push_back(xv[i]);
   if (y.segments() < 1 || y.segments() > max_segments_) return std::nullopt;
+  // No connection through a Dirac vertex (Veach 1997, Sec. 10.3.5): such a y has f = 0 and no
+  // split that could produce it has a density in the Dirac convention of lib/path/dirac.h.
+  if (!split_connectible(y, w.l, s)) return std::nullopt;
   return y;
 }
 

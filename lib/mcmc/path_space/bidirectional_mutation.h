@@ -9,10 +9,11 @@
 // camera side (from x_m, x_{m+1}), joined by a deterministic connection. y has ky = k - kd + ka
 // segments.
 //
-// Probabilities (all depend on x only through k and the kept ends, so the reverse move sees them):
-//   P_del(l, m | x)  = p_d(kd) / #positions(kd),  p_d(kd) ∝ {1: 1/4, 2: 1/2, >= 3: 2^-kd} over the
-//                      valid kd (Veach 1997, Sec. 11.4.2.1 uses the same shape); no (l = -1, kd = 1)
-//                      move, and l >= 0 when x_0 is a Dirac-position light (it could not be told
+// Probabilities (they depend on x through k, its Dirac flags and the kept ends; the reverse move
+// evaluates them on y):
+//   P_del(l, m | x)  = p_d(kd) / #positions(kd) (positions with non-Dirac kept ends),
+//                      p_d(kd) ∝ {1: 1/4, 2: 1/2, >= 3: 2^-kd} over the valid kd (Veach 1997,
+//                      Sec. 11.4.2.1 uses the same shape); no (l = -1, kd = 1) move, and l >= 0 when x_0 is a Dirac-position light (it could not be told
 //                      apart from its regeneration);
 //   P_add(ka | kd, k) ∝ w(|ka - kd|), w = {4, 2, 1} for 0, 1, 2 (else 0), over ka >= 1 with
 //                      1 <= ky <= max_segments, excluding the null move kd = ka = 1;
@@ -23,6 +24,12 @@
 //   p_{s'}(y) = prod_{i = l+1}^{l+s'} pL_y(i) prod_{i = l+s'+1}^{l+na} pE_y(i),
 // with pL_y(i) = pdf_next(y_{i-2}, y_{i-1} -> y_i) (pdf_light_origin for i = 0) and pE_y(i) =
 // pdf_next(y_{i+2}, y_{i+1} -> y_i): the area densities the steps of subpath_step.h sample with.
+// Dirac vertices (mirror, glass; lib/path/dirac.h): kept ends x_l, x_m are never Dirac vertices
+// (P_del is normalised over the pairs with valid ends, so it depends on x's Dirac flags, and the
+// reverse move evaluates it on y); a split whose connecting edge touches a Dirac vertex of y is
+// rejected when proposed and has density 0 in the sum (Veach 1997, Sec. 10.3.5: a connection can
+// never reach a specular vertex); the densities of vertices sampled through a Dirac vertex are the
+// pseudo densities of dirac.h (lobe probability, the delta dropped as in f).
 // (l, m, ka) are read off (x, y) as the longest common prefix and suffix: the kept vertices are
 // the only shared ones with probability one, so the sum over ways runs over the splits s' only.
 #pragma once
@@ -66,6 +73,9 @@ class BidirectionalMutation {
   std::optional<Way> way_between(const MltPath& x, const MltPath& y) const;
   // y from x by way w and split s (uniforms for the new vertices only).
   std::optional<MltPath> propose_way(const MltPath& x, const Way& w, int s, Uniforms& u) const;
+  // Is the connecting edge y_{l+s'} -- y_{l+s'+1} of split s' free of Dirac vertices (for l + s' = -1:
+  // is y_0, reached by the camera subpath, not a Dirac vertex)?
+  bool split_connectible(const MltPath& y, int l, int s) const;
   // p_{s'}(y): product of the area densities of y's added vertices y_{l+1} .. y_{l+na}.
   double split_density(const MltPath& y, int l, int na, int s) const;
   int max_segments() const { return max_segments_; }

@@ -3,7 +3,30 @@
 #include <algorithm>
 #include <cmath>
 
+#include "lib/geometry/spawn.h"
+#include "lib/path/dirac.h"
+
 namespace tb::path_space {
+
+namespace {
+
+PathVertex surface_vertex(const PathContext& ctx, const Hit& hit) {
+  PathVertex v;
+  v.kind = VertexKind::kSurface;
+  v.hit = hit;
+  const SurfaceInfo& si = ctx.world->surface(hit.shape_id);
+  v.bsdf = si.bsdf;
+  v.light = si.emitter;
+  v.delta = is_dirac_surface(v);
+  return v;
+}
+
+// The lobe of the Dirac vertex x_i seen from the camera side (radiance mode: wo towards x_{i+1}).
+bool transmits(const MltPath& x, int i) {
+  return is_dirac_transmission(x.v[i], direction(x.v[i], x.v[i + 1]), direction(x.v[i], x.v[i - 1]));
+}
+
+}  // namespace
 
 LensPerturbation::LensPerturbation(const PathContext& ctx, double r1, double r2, LensFault fault)
     : ctx_(&ctx), r1_(r1), r2_(r2), fault_(fault) {
@@ -12,13 +35,21 @@ LensPerturbation::LensPerturbation(const PathContext& ctx, double r1, double r2,
   if (!(r2_ > r1_)) r2_ = 2.0 * r1_;
 }
 
+int LensPerturbation::chain_end(const MltPath& x) const {
+  int j = x.segments() - 1;
+  while (j >= 0 && is_dirac_surface(x.v[j])) --j;
+  return j;
+}
+
 bool LensPerturbation::applicable(const MltPath& x) const {
   const int k = x.segments();
   if (k < 1 || x.v[k].kind != VertexKind::kCamera || !ctx_->world->camera().lens_is_delta()) return false;
-  const PathVertex& v = x.v[k - 1];
-  // k = 1: x_0 is the emitter seen directly (a surface hit or an emitter-sampled point).
-  if (k == 1 && v.is_light_kind()) return !v.delta && !v.infinite;
-  return v.is_surface() && !v.delta;
+  const int j = chain_end(x);
+  if (j < 0) return false;
+  const PathVertex& v = x.v[j];
+  // j = 0: x_0 is the emitter seen (through the chain): a surface hit or an emitter-sampled point.
+  if (j == 0) return v.is_light_kind() ? !v.delta && !v.infinite : v.is_surface() && !v.delta;
+  return v.is_surface() && !v.delta && !is_dirac_surface(x.v[j - 1]);
 }
 
 Vec2 LensPerturbation::sample_offset(const Vec2& u) const {
@@ -41,17 +72,21 @@ std::optional<MltPath> LensPerturbation::perturb(const MltPath& x, const Vec2& o
   const Camera& cam = ctx_->world->camera();
   if (!cam.projection().inside(ry)) return std::nullopt;
   const CameraRay cr = cam.generate_ray(ry, Vec2(0.5));
-  const int k = x.segments();
+  const int k = x.segments(), j = chain_end(x);
   const auto hit = ctx_->world->geometry().intersect(Ray{x.v[k].hit.p, cr.ray.d});
   if (!hit) return std::nullopt;
-  PathVertex v;
-  v.kind = VertexKind::kSurface;
-  v.hit = *hit;
-  const SurfaceInfo& si = ctx_->world->surface(hit->shape_id);
-  v.bsdf = si.bsdf;
-  v.light = si.emitter;
   MltPath y = x;
-  y.v[k - 1] = v;
+  y.v[k - 1] = surface_vertex(*ctx_, *hit);
+  // Through the specular chain, each vertex with its lobe in x (Veach 1997, Sec. 11.4.3).
+  for (int i = k - 1; i > j; --i) {
+    if (!is_dirac_surface(y.v[i])) return std::nullopt;
+    const auto s = dirac_lobe_sample(y.v[i], direction(y.v[i], y.v[i + 1]), transmits(x, i), TransportMode::kRadiance);
+    if (!s) return std::nullopt;
+    const auto h = ctx_->world->geometry().intersect(spawn_ray(y.v[i].hit, s->wi));
+    if (!h) return std::nullopt;
+    y.v[i - 1] = surface_vertex(*ctx_, *h);
+  }
+  if (is_dirac_surface(y.v[j])) return std::nullopt;
   return y;
 }
 
@@ -61,16 +96,23 @@ std::optional<MltPath> LensPerturbation::propose(const MltPath& x, Uniforms& u) 
 }
 
 double LensPerturbation::raster_jacobian(const MltPath& x) const {
-  const int k = x.segments();
-  return static_cast<double>(ctx_->world->camera().pixel_count()) *
-         pdf_next(*ctx_, nullptr, x.v[k], x.v[k - 1], TransportMode::kRadiance);
+  const int k = x.segments(), j = chain_end(x);
+  double p = static_cast<double>(ctx_->world->camera().pixel_count()) *
+             pdf_next(*ctx_, nullptr, x.v[k], x.v[k - 1], TransportMode::kRadiance);
+  for (int i = k - 1; i > j; --i)
+    p *= pdf_next_dirac(*ctx_, &x.v[i + 1], x.v[i], x.v[i - 1], TransportMode::kRadiance, DiracLobeChoice::kKept);
+  return p;
 }
 
 double LensPerturbation::density(const MltPath& x, const MltPath& y) const {
   const int k = x.segments();
   if (y.segments() != k || !applicable(x) || !applicable(y)) return 0.0;
+  const int j = chain_end(x);
+  if (chain_end(y) != j) return 0.0;
   for (int i = 0; i <= k; ++i)
-    if (i != k - 1 && !same_vertex(x.v[i], y.v[i])) return 0.0;
+    if ((i < j || i == k) && !same_vertex(x.v[i], y.v[i])) return 0.0;
+  for (int i = k - 1; i > j; --i)
+    if (transmits(x, i) != transmits(y, i)) return 0.0;
   const auto rx = path_raster(*ctx_, x), ry = path_raster(*ctx_, y);
   if (!rx || !ry) return 0.0;
   const double kern = kernel_density(*ry - *rx);

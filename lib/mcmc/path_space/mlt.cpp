@@ -25,8 +25,9 @@ MltStats run_mlt(const World& world, const RenderSettings& st, Film& film, const
   const BidirectionalMutation bidir(ctx, max_segments, opt.bidir_fault);
   const LensPerturbation lens(ctx, 0.1, 0.0, opt.lens_fault);
   const CausticPerturbation caustic(ctx);
-  const mcmc::Mixture mixture(opt.selection, bidir, lens, caustic);
-  constexpr int kComponents = 3;
+  const MultiChainPerturbation multi(ctx);
+  const mcmc::Mixture mixture(opt.selection, bidir, lens, caustic, multi);
+  constexpr int kComponents = 4;
 
   const int64_t P = cam.pixel_count();
   const int64_t chains = std::max<int64_t>(1, st.passes);
@@ -34,7 +35,8 @@ MltStats run_mlt(const World& world, const RenderSettings& st, Film& film, const
   const int64_t n_boot = opt.bootstrap_per_chain > 0 ? opt.bootstrap_per_chain : std::max<int64_t>(256, 4 * P / chains);
 
   MltStats stats;
-  stats.mutations = {MutationStats{"bidirectional"}, MutationStats{"lens"}, MutationStats{"caustic"}};
+  stats.mutations = {MutationStats{"bidirectional"}, MutationStats{"lens"}, MutationStats{"caustic"},
+                     MutationStats{"multi-chain"}};
   const auto t0 = std::chrono::steady_clock::now();
   const int64_t batch = 16;  // chains per parallel batch: bounds splat memory, independent of threads
   double b_sum = 0.0;

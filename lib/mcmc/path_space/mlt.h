@@ -1,12 +1,13 @@
 // Veach's path-space Metropolis light transport (Veach 1997, Ch. 11; Veach & Guibas 1997): many
 // independent chains on paths (path_state.h), each a Metropolis-Hastings chain over the mixture
-// of the bidirectional mutation, the lens and the caustic perturbation, run by the generic kernel of
-// estimators/mcmc/ (Mixture, select_component, HastingsRatio): the acceptance of a move by
-// component j is min(1, pi(y) c_j(y) T_j(y -> x) / (pi(x) c_j(x) T_j(x -> y))) with the T_j the
-// mutations state, the same functions the detailed-balance checks evaluate. Components: 0
-// bidirectional mutation, 1 lens perturbation, 2 caustic perturbation, selected with
-// probabilities c_j(x) that depend on the path length (MutationSelection), so the ratio
-// c_j(y) / c_j(x) enters the acceptance of length-changing bidirectional moves.
+// of the bidirectional mutation, the lens, the caustic and the multi-chain perturbation, run by
+// the generic kernel of estimators/mcmc/ (Mixture, select_component, HastingsRatio): the
+// acceptance of a move by component j is
+//   min(1, pi(y) c_j(y) T_j(y -> x) / (pi(x) c_j(x) T_j(x -> y)))
+// with the T_j the mutations state, the same functions the detailed-balance checks evaluate.
+// Components: 0 bidirectional mutation, 1 lens, 2 caustic, 3 multi-chain perturbation, selected
+// with probabilities c_j(x) that depend on the path (MutationSelection), so the ratio
+// c_j(y) / c_j(x) enters the acceptance of moves that change the length or the specular structure.
 //
 // Estimator (Veach 1997, Sec. 11.3): pixel j has I_j = P int h_j(r(x)) f(x) dmu(x) (P pixels,
 // whole-image camera normalisation, docs/camera.md) = P b E_pi[h_j f / Y(f)], b = int Y(f) dmu.
@@ -33,18 +34,21 @@
 #include "lib/mcmc/path_space/bidirectional_mutation.h"
 #include "lib/mcmc/path_space/caustic_perturbation.h"
 #include "lib/mcmc/path_space/lens_perturbation.h"
+#include "lib/mcmc/path_space/multi_chain_perturbation.h"
 #include "lib/scene/world.h"
 
 namespace tb::path_space {
 
-// c_j(x): (p_bidir, p_lens, p_caustic) normalised, with p_caustic = 0 for paths of fewer than two
-// segments (where the caustic perturbation cannot act).
+// c_j(x): (p_bidir, p_lens, p_caustic, p_multi) normalised, with p_caustic = 0 for paths of fewer
+// than two segments (where the caustic perturbation cannot act) and p_multi = 0 for paths without
+// the multi-chain structure (multi_chain_levels empty).
 struct MutationSelection {
-  double p_bidir = 0.4, p_lens = 0.3, p_caustic = 0.3;
+  double p_bidir = 0.4, p_lens = 0.3, p_caustic = 0.3, p_multi = 0.2;
   double operator()(int j, const MltPath& x) const {
     const double pc = x.segments() >= 2 ? p_caustic : 0.0;
-    const double sum = p_bidir + p_lens + pc;
-    return (j == 0 ? p_bidir : j == 1 ? p_lens : pc) / sum;
+    const double pm = p_multi > 0.0 && !multi_chain_levels(x).empty() ? p_multi : 0.0;
+    const double sum = p_bidir + p_lens + pc + pm;
+    return (j == 0 ? p_bidir : j == 1 ? p_lens : j == 2 ? pc : pm) / sum;
   }
 };
 
@@ -66,7 +70,7 @@ struct MutationStats {
 };
 
 struct MltStats {
-  std::vector<MutationStats> mutations;  // bidirectional, lens, caustic
+  std::vector<MutationStats> mutations;  // bidirectional, lens, caustic, multi-chain
   int64_t chains = 0, mutations_total = 0, chains_without_start = 0;
   double b_mean = 0.0;      // mean of the chains' b_c
   double seconds = 0.0;

@@ -4,7 +4,7 @@ namespace tb::path_space {
 
 Rgb PathTarget::contribution(const MltPath& x) const {
   if (x.v.size() < 2) return Rgb(0.0);
-  return measurement_contribution(*ctx, x.v, true);
+  return measurement_contribution(*ctx, x.v, true, DiracPolicy::kCoefficient);
 }
 
 double PathTarget::density(const MltPath& x) const {

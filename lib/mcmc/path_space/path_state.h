@@ -6,8 +6,10 @@
 // on the disjoint union of the spaces of paths of each length. Every mutation of this folder
 // states its proposal density T(x -> y) with respect to the same measure (see docs/mlt-path-space.md).
 //
-// Scope: paths with a Dirac vertex have f = 0 in lib/path (measurement_contribution has no Dirac
-// factors), so the chains live on paths without specular vertices; the camera must have a Dirac
+// Dirac (specular) vertices: f uses the Dirac coefficients of lib/path/dirac.h
+// (DiracPolicy::kCoefficient), and every mutation states T in the same convention (the delta
+// dropped from f and from the densities alike; Veach 1997, Sec. 10.3.5 and 11.4). A vertex's
+// `delta` flag is is_dirac_surface(), a property of its material. The camera must have a Dirac
 // lens position (pinhole): the camera vertex x_k is never regenerated.
 #pragma once
 

@@ -58,7 +58,8 @@ double LensOffsetProjection::pdf(const Vec2& q) const {
   const Vec2 d(r * std::cos(q.x), r * std::sin(q.x));
   const auto y = lens->perturb(x, d);
   if (!y) return 0.0;
-  return lens->density(x, *y) / lens->raster_jacobian(*y) * r * r;
+  const double jac = lens->raster_jacobian(*y);
+  return jac > 0.0 ? lens->density(x, *y) / jac * r * r : 0.0;
 }
 
 Vec2 LensOffsetProjection::chart_lo() const { return {0.0, std::log(lens->r1()) - 0.2}; }
@@ -67,10 +68,10 @@ Vec2 LensOffsetProjection::chart_hi() const { return {2 * kPi, std::log(lens->r2
 std::optional<Vec2> CausticAngleProjection::sample(Uniforms& u) const {
   const auto y = caustic->propose(x, u);
   if (!y) return std::nullopt;
-  const int k = x.segments();
+  const int i = caustic->perturbed_index(x);
   const Vec3 o = caustic->apex(x);
-  const Vec3 w0 = glm::normalize(x.v[k - 1].hit.p - o);
-  const Vec3 local = Frame::from_z(w0).to_local(glm::normalize(y->v[k - 1].hit.p - o));
+  const Vec3 w0 = glm::normalize(x.v[i].hit.p - o);
+  const Vec3 local = Frame::from_z(w0).to_local(glm::normalize(y->v[i].hit.p - o));
   double phi = std::atan2(local.y, local.x);
   if (phi < 0) phi += 2 * kPi;
   return Vec2(phi, std::log(caustic->angle(x, *y)));

@@ -25,6 +25,9 @@
 #include "lib/mcmc/path_space/bidirectional_mutation.h"
 #include "lib/mcmc/path_space/caustic_perturbation.h"
 #include "lib/mcmc/path_space/lens_perturbation.h"
+#include "lib/mcmc/path_space/multi_chain_perturbation.h"
+#include "lib/geometry/spawn.h"
+#include "lib/path/dirac.h"
 
 namespace tb::path_space {
 
@@ -36,9 +39,10 @@ inline double reference_density(const BidirectionalMutation& mut, const MltPath&
   const double pa = mut.addition_probability(x.segments(), w->kd(), w->ka);
   const auto splits = mut.valid_splits(x, *w);
   if (!(pd > 0.0) || !(pa > 0.0) || splits.empty()) return 0.0;
-  const PathDensities d = path_densities(mut.context(), y.v);
+  const PathDensities d = path_densities(mut.context(), y.v, DiracPolicy::kCoefficient);
   double sum = 0.0;
   for (int s : splits) {
+    if (!mut.split_connectible(y, w->l, s)) continue;
     double p = 1.0;
     for (int i = w->l + 1; i <= w->l + w->na(); ++i) p *= i <= w->l + s ? d.pL[i] : d.pE[i];
     sum += p;
@@ -50,12 +54,17 @@ inline double reference_density(const LensPerturbation& lens, const PathContext&
                                 const MltPath& y) {
   const int k = x.segments();
   if (y.segments() != k || !lens.applicable(x) || !lens.applicable(y)) return 0.0;
+  const int j = lens.chain_end(x);
+  if (lens.chain_end(y) != j) return 0.0;
   for (int i = 0; i <= k; ++i)
-    if (i != k - 1 && !same_vertex(x.v[i], y.v[i])) return 0.0;
+    if ((i < j || i == k) && !same_vertex(x.v[i], y.v[i])) return 0.0;
   const auto rx = path_raster(ctx, x), ry = path_raster(ctx, y);
   if (!rx || !ry) return 0.0;
-  const PathDensities d = path_densities(ctx, y.v);
-  return lens.kernel_density(*ry - *rx) * static_cast<double>(ctx.world->camera().pixel_count()) * d.pE[k - 1];
+  // The moved vertices y_j .. y_{k-1}, sampled from the camera with the lobes kept.
+  const PathDensities d = path_densities(ctx, y.v, DiracPolicy::kCoefficientKeptLobe);
+  double p = lens.kernel_density(*ry - *rx) * static_cast<double>(ctx.world->camera().pixel_count());
+  for (int i = j; i <= k - 1; ++i) p *= d.pE[i];
+  return p;
 }
 
 // Caustic perturbation: kernel at the angle from acos of the dot product, times |cos| / d^2 at
@@ -63,14 +72,54 @@ inline double reference_density(const LensPerturbation& lens, const PathContext&
 inline double reference_density(const CausticPerturbation& c, const MltPath& x, const MltPath& y) {
   const int k = x.segments();
   if (y.segments() != k || !c.applicable(x) || !c.applicable(y)) return 0.0;
+  const int j = c.chain_start(x);
+  if (c.chain_start(y) != j) return 0.0;
   for (int i = 0; i <= k; ++i)
-    if (i != k - 1 && !same_vertex(x.v[i], y.v[i])) return 0.0;
-  if (!c.same_side(x, y.v[k - 1].hit.p)) return 0.0;
-  const Vec3 a = c.apex(x), dx = x.v[k - 1].hit.p - a, dy = y.v[k - 1].hit.p - a;
+    if ((i <= j || i == k) && !same_vertex(x.v[i], y.v[i])) return 0.0;
+  if (!c.same_side(x, y.v[j + 1].hit.p)) return 0.0;
+  const Vec3 a = c.apex(x), dx = x.v[j + 1].hit.p - a, dy = y.v[j + 1].hit.p - a;
   const double ly = glm::length(dy);
   const double cos_angle = glm::dot(dx, dy) / (glm::length(dx) * ly);
   const double theta = std::acos(std::clamp(cos_angle, -1.0, 1.0));
-  return c.kernel_density(theta) * std::abs(glm::dot(y.v[k - 1].hit.ng, dy)) / (ly * ly * ly);
+  double p = c.kernel_density(theta) * std::abs(glm::dot(y.v[j + 1].hit.ng, dy)) / (ly * ly * ly);
+  // The vertices after the specular chain's vertices, sampled from the light side with lobes kept.
+  const PathDensities d = path_densities(c.context(), y.v, DiracPolicy::kCoefficientKeptLobe);
+  for (int i = j + 2; i <= k - 1; ++i) p *= d.pL[i];
+  return p;
+}
+
+// Multi-chain perturbation: the lens part as above; below y_{k-1}, after a specular vertex the
+// pE of path_densities(y, kept lobes), after a continued level the angular kernel at the acos of
+// the directions' dot product times |cos| / d^2 written out here.
+inline double reference_density(const MultiChainPerturbation& mc, const PathContext& ctx, const MltPath& x,
+                                const MltPath& y) {
+  const int k = x.segments();
+  if (y.segments() != k) return 0.0;
+  const std::vector<int> lx = mc.levels(x);
+  if (lx.empty() || lx != mc.levels(y)) return 0.0;
+  const int last = lx.back();
+  for (int i = 0; i <= k; ++i)
+    if ((i < last || i == k) && !same_vertex(x.v[i], y.v[i])) return 0.0;
+  const auto rx = path_raster(ctx, x), ry = path_raster(ctx, y);
+  if (!rx || !ry) return 0.0;
+  const PathDensities d = path_densities(ctx, y.v, DiracPolicy::kCoefficientKeptLobe);
+  double p = mc.lens().kernel_density(*ry - *rx) * static_cast<double>(ctx.world->camera().pixel_count()) * d.pE[k - 1];
+  for (int i = k - 1; i > last; --i) {
+    if (is_dirac_surface(y.v[i])) {
+      p *= d.pE[i - 1];
+      continue;
+    }
+    const auto apex_dir = [&](const MltPath& z) {
+      const Vec3 o = spawn_ray(z.v[i].hit, direction(z.v[i], z.v[i - 1])).o;
+      return std::pair<Vec3, Vec3>{o, z.v[i - 1].hit.p - o};
+    };
+    const auto [ox, dx] = apex_dir(x);
+    const auto [oy, dy] = apex_dir(y);
+    const double ly = glm::length(dy);
+    const double theta = std::acos(std::clamp(glm::dot(dx, dy) / (glm::length(dx) * ly), -1.0, 1.0));
+    p *= mc.angular_density(theta) * std::abs(glm::dot(y.v[i - 1].hit.ng, dy)) / (ly * ly * ly);
+  }
+  return p;
 }
 
 // K: a MetropolisHastings kernel; Ref: double(int component, const State& x, const State& y).

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "lib/path/dirac.h"
+
 namespace tb::path_space {
 
 MltPath assemble_connection(const std::vector<PathVertex>& light, const std::vector<PathVertex>& camera, int s, int t,
@@ -13,6 +15,10 @@ MltPath assemble_connection(const std::vector<PathVertex>& light, const std::vec
   for (int i = t - 1; i >= 0; --i) x.v.push_back(camera[i]);
   if (s == 1 && t >= 2) x.v[0] = c.sampled;
   if (t == 1) x.v.back() = c.sampled;
+  // Dirac flags as the path-space mutations set them: a property of the surface's material (BDPT
+  // flags only the vertices it scattered at).
+  for (auto& v : x.v)
+    if (v.is_surface()) v.delta = is_dirac_surface(v);
   return x;
 }
 

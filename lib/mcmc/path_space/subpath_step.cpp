@@ -2,6 +2,7 @@
 
 #include "lib/geometry/spawn.h"
 #include "lib/light/area_light.h"
+#include "lib/path/dirac.h"
 #include "lib/path/scattering.h"
 
 namespace tb::path_space {
@@ -17,6 +18,7 @@ std::optional<PathVertex> trace_to_vertex(const PathContext& ctx, const Ray& ray
   const SurfaceInfo& si = ctx.world->surface(hit->shape_id);
   v.bsdf = si.bsdf;
   v.light = si.emitter;
+  v.delta = is_dirac_surface(v);  // a property of the material (lib/path/dirac.h)
   return v;
 }
 
