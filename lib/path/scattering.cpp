@@ -4,10 +4,14 @@
 
 namespace tb {
 
-Frame SurfaceScatter::frame_for(const Vec3& wo) const {
+const Frame& SurfaceScatter::frame_for(const Vec3& wo) const {
   const bool transmissive = (bsdf_->flags() & bsdf_flags::kTransmission) != 0;
-  if (!transmissive && glm::dot(wo, hit_->ng) < 0) return Frame::from_z(-hit_->n);
-  return Frame::from_z(hit_->n);
+  const unsigned side = (!transmissive && glm::dot(wo, hit_->ng) < 0) ? 1u : 0u;
+  if (!(built_ & (1u << side))) {
+    frames_[side] = Frame::from_z(side ? -hit_->n : hit_->n);
+    built_ |= 1u << side;
+  }
+  return frames_[side];
 }
 
 bool SurfaceScatter::sides_ok(const Vec3& wo, const Vec3& wi) const {
@@ -25,18 +29,18 @@ double SurfaceScatter::correction(const Vec3& wo, const Vec3& wi, TransportMode 
 
 Rgb SurfaceScatter::f(const Vec3& wo, const Vec3& wi, TransportMode mode) const {
   if (!sides_ok(wo, wi)) return Rgb(0.0);
-  const Frame fr = frame_for(wo);
+  const Frame& fr = frame_for(wo);
   return bsdf_->eval(fr.to_local(wo), fr.to_local(wi), mode) * correction(wo, wi, mode);
 }
 
 double SurfaceScatter::pdf(const Vec3& wo, const Vec3& wi, TransportMode mode) const {
-  const Frame fr = frame_for(wo);
+  const Frame& fr = frame_for(wo);
   return bsdf_->pdf(fr.to_local(wo), fr.to_local(wi), mode);
 }
 
 std::optional<WorldBsdfSample> SurfaceScatter::sample(const Vec3& wo, double uc, const Vec2& u,
                                                       TransportMode mode) const {
-  const Frame fr = frame_for(wo);
+  const Frame& fr = frame_for(wo);
   const auto bs = bsdf_->sample(fr.to_local(wo), uc, u, mode);
   if (!bs || !(bs->pdf > 0)) return std::nullopt;
   WorldBsdfSample s;

@@ -42,11 +42,15 @@ class SurfaceScatter {
   const Hit& hit() const { return *hit_; }
 
  private:
-  Frame frame_for(const Vec3& wo) const;
+  // The shading frame on wo's side, built at most once per side (f, pdf and sample at one vertex
+  // share it).
+  const Frame& frame_for(const Vec3& wo) const;
   double correction(const Vec3& wo, const Vec3& wi, TransportMode mode) const;
   bool sides_ok(const Vec3& wo, const Vec3& wi) const;
   const Hit* hit_;
   const Bsdf* bsdf_;
+  mutable Frame frames_[2];     // [0]: from_z(n), [1]: from_z(-n)
+  mutable unsigned built_ = 0;  // bit i: frames_[i] is built
 };
 
 }  // namespace tb
