@@ -394,9 +394,9 @@ FluxBinCounts run_flux_bins(const K& kernel, const CornellScene& sc, FluxBinOpti
 }
 
 CheckResult flux_bins_check(LensFault lens_fault, bool lens_only, const CheckContext& cx, const std::string& name,
-                            const std::string& file = "cornell-box.json") {
+                            const std::string& file = "cornell-box.json", BidirFault bidir_fault = BidirFault::kNone) {
   const CornellScene& sc = scene(file);
-  const BidirectionalMutation bidir(sc.ctx, kMaxDepth + 1);
+  const BidirectionalMutation bidir(sc.ctx, kMaxDepth + 1, bidir_fault);
   const LensPerturbation lens(sc.ctx, 0.1, lens_only ? 0.5 * kResolution : 0.0, lens_fault);
   const CausticPerturbation caustic(sc.ctx);
   const MultiChainPerturbation multi(sc.ctx);
@@ -603,9 +603,17 @@ const bool registered = [] {
       "binomial test per bin pair, Šidák",
       CheckKind::kStatistical,
       [](const CheckContext& cx, const std::string& n) { return flux_bins_check(LensFault::kNone, true, cx, n); });
-  // The negative control of the bin flux check (lens perturbation without its T ratio) is NOT
-  // registered: it is not caught at these sizes (docs/mlt-path-space.md, "Flux symmetry by bins").
-  // Run it by hand with flux_bins_check(LensFault::kDropDensityRatio, true, ...).
+  // Negative control of the bin flux check: the mixture with the bidirectional mutation's density
+  // missing a geometry term (moves between path lengths then favour one side). The lens
+  // perturbation without its T ratio is NOT caught at these sizes (docs/mlt-path-space.md, "Flux
+  // symmetry by bins"); run it by hand with flux_bins_check(LensFault::kDropDensityRatio, true, ...).
+  add(p + "negative_control.bidir_missing_geometry.flux_bins",
+      "Negative control: the bin flux check must reject the MLT kernel with a bidirectional density without geometry "
+      "term",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) {
+        return negate(flux_bins_check(LensFault::kNone, false, cx, n, "cornell-box.json",
+                                      BidirFault::kMissingGeometryTerm));
+      });
   add(p + "mixture.net_flux",
       "The MLT kernel: zero net flux in path length, raster x / y and ln pi (t-tests over resampled-start chains)",
       CheckKind::kStatistical,
