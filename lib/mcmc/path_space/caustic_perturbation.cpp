@@ -9,26 +9,6 @@
 
 namespace tb::path_space {
 
-namespace {
-
-PathVertex surface_vertex(const PathContext& ctx, const Hit& hit) {
-  PathVertex v;
-  v.kind = VertexKind::kSurface;
-  v.hit = hit;
-  const SurfaceInfo& si = ctx.world->surface(hit.shape_id);
-  v.bsdf = si.bsdf;
-  v.light = si.emitter;
-  v.delta = is_dirac_surface(v);
-  return v;
-}
-
-// The lobe of the Dirac vertex x_i seen from the light side (importance mode: wo towards x_{i-1}).
-bool transmits(const MltPath& x, int i) {
-  return is_dirac_transmission(x.v[i], direction(x.v[i], x.v[i - 1]), direction(x.v[i], x.v[i + 1]));
-}
-
-}  // namespace
-
 int CausticPerturbation::chain_start(const MltPath& x) const {
   int j = x.segments() - 2;
   while (j >= 0 && is_dirac_surface(x.v[j])) --j;
@@ -82,7 +62,7 @@ std::optional<MltPath> CausticPerturbation::perturb(const MltPath& x, double the
   for (int i = j + 1; i <= k - 2; ++i) {
     if (!is_dirac_surface(y.v[i])) return std::nullopt;
     const auto s =
-        dirac_lobe_sample(y.v[i], direction(y.v[i], y.v[i - 1]), transmits(x, i), TransportMode::kImportance);
+        dirac_lobe_sample(y.v[i], direction(y.v[i], y.v[i - 1]), transmits_from_light_side(x, i), TransportMode::kImportance);
     if (!s) return std::nullopt;
     const auto h = ctx_->world->geometry().intersect(spawn_ray(y.v[i].hit, s->wi));
     if (!h) return std::nullopt;
@@ -121,7 +101,7 @@ double CausticPerturbation::density(const MltPath& x, const MltPath& y) const {
   for (int i = 0; i <= k; ++i)
     if ((i <= j || i == k) && !same_vertex(x.v[i], y.v[i])) return 0.0;
   for (int i = j + 1; i <= k - 2; ++i)
-    if (transmits(x, i) != transmits(y, i)) return 0.0;
+    if (transmits_from_light_side(x, i) != transmits_from_light_side(y, i)) return 0.0;
   if (!same_side(x, y.v[j + 1].hit.p)) return 0.0;
   return kernel_density(angle(x, y)) * area_factor(y);
 }

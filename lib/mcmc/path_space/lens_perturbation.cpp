@@ -8,26 +8,6 @@
 
 namespace tb::path_space {
 
-namespace {
-
-PathVertex surface_vertex(const PathContext& ctx, const Hit& hit) {
-  PathVertex v;
-  v.kind = VertexKind::kSurface;
-  v.hit = hit;
-  const SurfaceInfo& si = ctx.world->surface(hit.shape_id);
-  v.bsdf = si.bsdf;
-  v.light = si.emitter;
-  v.delta = is_dirac_surface(v);
-  return v;
-}
-
-// The lobe of the Dirac vertex x_i seen from the camera side (radiance mode: wo towards x_{i+1}).
-bool transmits(const MltPath& x, int i) {
-  return is_dirac_transmission(x.v[i], direction(x.v[i], x.v[i + 1]), direction(x.v[i], x.v[i - 1]));
-}
-
-}  // namespace
-
 LensPerturbation::LensPerturbation(const PathContext& ctx, double r1, double r2, LensFault fault)
     : ctx_(&ctx), r1_(r1), r2_(r2), fault_(fault) {
   const Camera& cam = ctx.world->camera();
@@ -80,7 +60,7 @@ std::optional<MltPath> LensPerturbation::perturb(const MltPath& x, const Vec2& o
   // Through the specular chain, each vertex with its lobe in x (Veach 1997, Sec. 11.4.3).
   for (int i = k - 1; i > j; --i) {
     if (!is_dirac_surface(y.v[i])) return std::nullopt;
-    const auto s = dirac_lobe_sample(y.v[i], direction(y.v[i], y.v[i + 1]), transmits(x, i), TransportMode::kRadiance);
+    const auto s = dirac_lobe_sample(y.v[i], direction(y.v[i], y.v[i + 1]), transmits_from_camera_side(x, i), TransportMode::kRadiance);
     if (!s) return std::nullopt;
     const auto h = ctx_->world->geometry().intersect(spawn_ray(y.v[i].hit, s->wi));
     if (!h) return std::nullopt;
@@ -112,7 +92,7 @@ double LensPerturbation::density(const MltPath& x, const MltPath& y) const {
   for (int i = 0; i <= k; ++i)
     if ((i < j || i == k) && !same_vertex(x.v[i], y.v[i])) return 0.0;
   for (int i = k - 1; i > j; --i)
-    if (transmits(x, i) != transmits(y, i)) return 0.0;
+    if (transmits_from_camera_side(x, i) != transmits_from_camera_side(y, i)) return 0.0;
   const auto rx = path_raster(*ctx_, x), ry = path_raster(*ctx_, y);
   if (!rx || !ry) return 0.0;
   const double kern = kernel_density(*ry - *rx);

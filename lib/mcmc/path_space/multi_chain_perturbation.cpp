@@ -11,22 +11,6 @@ namespace tb::path_space {
 
 namespace {
 
-PathVertex surface_vertex(const PathContext& ctx, const Hit& hit) {
-  PathVertex v;
-  v.kind = VertexKind::kSurface;
-  v.hit = hit;
-  const SurfaceInfo& si = ctx.world->surface(hit.shape_id);
-  v.bsdf = si.bsdf;
-  v.light = si.emitter;
-  v.delta = is_dirac_surface(v);
-  return v;
-}
-
-// Reflection or transmission at x_i between its neighbours.
-bool transmits(const MltPath& x, int i) {
-  return is_dirac_transmission(x.v[i], direction(x.v[i], x.v[i + 1]), direction(x.v[i], x.v[i - 1]));
-}
-
 // The direction from the apex at x_i (spawn_ray's origin towards x_{i-1}) to x_{i-1}.
 Vec3 apex_direction(const MltPath& x, int i) {
   const Vec3 o = spawn_ray(x.v[i].hit, direction(x.v[i], x.v[i - 1])).o;
@@ -42,7 +26,7 @@ bool trace_chain(const PathContext& ctx, const MltPath& x, MltPath& y, int i, Ve
     y.v[c - 1] = surface_vertex(ctx, *h);
     if (c - 1 == stop) break;
     if (!is_dirac_surface(y.v[c - 1])) return false;
-    const auto s = dirac_lobe_sample(y.v[c - 1], -w, transmits(x, c - 1), TransportMode::kRadiance);
+    const auto s = dirac_lobe_sample(y.v[c - 1], -w, transmits_from_camera_side(x, c - 1), TransportMode::kRadiance);
     if (!s) return false;
     w = s->wi;
   }
@@ -101,7 +85,7 @@ std::optional<MltPath> MultiChainPerturbation::perturb(const MltPath& x, const V
   y.v[k - 1] = surface_vertex(*ctx_, *h);
   if (k - 1 > lv[0]) {
     if (!is_dirac_surface(y.v[k - 1])) return std::nullopt;
-    const auto s = dirac_lobe_sample(y.v[k - 1], -cr.ray.d, transmits(x, k - 1), TransportMode::kRadiance);
+    const auto s = dirac_lobe_sample(y.v[k - 1], -cr.ray.d, transmits_from_camera_side(x, k - 1), TransportMode::kRadiance);
     if (!s || !trace_chain(*ctx_, x, y, k - 1, s->wi, lv[0])) return std::nullopt;
   } else if (is_dirac_surface(y.v[k - 1])) {
     return std::nullopt;
@@ -142,7 +126,7 @@ double MultiChainPerturbation::density(const MltPath& x, const MltPath& y) const
   for (int i = 0; i <= k; ++i)
     if ((i < last || i == k) && !same_vertex(x.v[i], y.v[i])) return 0.0;
   for (int i = last + 1; i < k; ++i)
-    if (is_dirac_surface(x.v[i]) && transmits(x, i) != transmits(y, i)) return 0.0;
+    if (is_dirac_surface(x.v[i]) && transmits_from_camera_side(x, i) != transmits_from_camera_side(y, i)) return 0.0;
   const auto rx = path_raster(*ctx_, x), ry = path_raster(*ctx_, y);
   if (!rx || !ry) return 0.0;
   double t = lens_.kernel_density(*ry - *rx) * static_cast<double>(ctx_->world->camera().pixel_count()) *

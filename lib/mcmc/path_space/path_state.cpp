@@ -1,5 +1,7 @@
 #include "lib/mcmc/path_space/path_state.h"
 
+#include "lib/path/dirac.h"
+
 namespace tb::path_space {
 
 Rgb PathTarget::contribution(const MltPath& x) const {
@@ -10,6 +12,25 @@ Rgb PathTarget::contribution(const MltPath& x) const {
 double PathTarget::density(const MltPath& x) const {
   const double y = luminance(contribution(x));
   return y > 0.0 ? y : 0.0;
+}
+
+PathVertex surface_vertex(const PathContext& ctx, const Hit& hit) {
+  PathVertex v;
+  v.kind = VertexKind::kSurface;
+  v.hit = hit;
+  const SurfaceInfo& si = ctx.world->surface(hit.shape_id);
+  v.bsdf = si.bsdf;
+  v.light = si.emitter;
+  v.delta = is_dirac_surface(v);  // a property of the material (lib/path/dirac.h)
+  return v;
+}
+
+bool transmits_from_camera_side(const MltPath& x, int i) {
+  return is_dirac_transmission(x.v[i], direction(x.v[i], x.v[i + 1]), direction(x.v[i], x.v[i - 1]));
+}
+
+bool transmits_from_light_side(const MltPath& x, int i) {
+  return is_dirac_transmission(x.v[i], direction(x.v[i], x.v[i - 1]), direction(x.v[i], x.v[i + 1]));
 }
 
 bool same_vertex(const PathVertex& a, const PathVertex& b) {

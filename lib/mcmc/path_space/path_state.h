@@ -39,6 +39,15 @@ struct PathTarget {
 // camera vertex (Dirac lens) is never regenerated and Dirac light positions are never deleted.
 bool same_vertex(const PathVertex& a, const PathVertex& b);
 
+// The path vertex at a surface hit: its material, emitter and Dirac flag (is_dirac_surface).
+PathVertex surface_vertex(const PathContext& ctx, const Hit& hit);
+
+// The lobe of the Dirac vertex x_i (0 < i < k): transmission or reflection between its
+// neighbours, seen from the camera side (radiance mode: wo towards x_{i+1}) or from the light
+// side (importance mode: wo towards x_{i-1}).
+bool transmits_from_camera_side(const MltPath& x, int i);
+bool transmits_from_light_side(const MltPath& x, int i);
+
 // Raster position of the path: where the ray from the lens vertex x_k towards x_{k-1} meets the
 // film (nothing when outside the image).
 std::optional<Vec2> path_raster(const PathContext& ctx, const MltPath& x);

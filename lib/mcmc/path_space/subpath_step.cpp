@@ -2,6 +2,7 @@
 
 #include "lib/geometry/spawn.h"
 #include "lib/light/area_light.h"
+#include "lib/mcmc/path_space/path_state.h"
 #include "lib/path/dirac.h"
 #include "lib/path/scattering.h"
 
@@ -12,14 +13,7 @@ namespace {
 std::optional<PathVertex> trace_to_vertex(const PathContext& ctx, const Ray& ray) {
   const auto hit = ctx.world->geometry().intersect(ray);
   if (!hit) return std::nullopt;  // infinite lights are not targets of these mutations
-  PathVertex v;
-  v.kind = VertexKind::kSurface;
-  v.hit = *hit;
-  const SurfaceInfo& si = ctx.world->surface(hit->shape_id);
-  v.bsdf = si.bsdf;
-  v.light = si.emitter;
-  v.delta = is_dirac_surface(v);  // a property of the material (lib/path/dirac.h)
-  return v;
+  return surface_vertex(ctx, *hit);
 }
 
 bool emits(const PathVertex& v) { return v.light != nullptr && !v.infinite; }
