@@ -1,11 +1,11 @@
 #include "validate/render/naive_path_tracer.h"
 
 #include <algorithm>
-#include <chrono>
 
 #include "lib/core/rng.h"
 #include "lib/film/film_parallel.h"
 #include "lib/geometry/spawn.h"
+#include "lib/integrator/pass_loop.h"
 #include "lib/path/scattering.h"
 
 namespace tb {
@@ -50,37 +50,19 @@ Rgb radiance(const World& world, Ray ray, int max_depth, Rng& rng) {
 
 int64_t render_naive_path_tracer(const World& world, const RenderSettings& st, Film& film) {
   const Camera& cam = world.camera();
-  const int64_t passes = std::max<int64_t>(1, st.passes);
-  const int64_t spp_pass = std::max<int64_t>(1, st.spp / passes);
-  const auto t0 = std::chrono::steady_clock::now();
-  int64_t done = 0;
-  for (int64_t pass = 0; pass < passes; ++pass) {
-    if (st.interrupted && st.interrupted->load()) break;
+  return run_passes(st, film, [&](int64_t pass, int64_t spp_pass) {
     for_each_film_tile(film, 16, [&](FilmTile& tile) {
-      const PixelBounds& pb = tile.pixels();
-      for (int y = pb.y0; y < pb.y1; ++y)
-        for (int x = pb.x0; x < pb.x1; ++x) {
-          const uint64_t pixel = uint64_t(y) * uint64_t(film.width()) + uint64_t(x);
-          for (int64_t s = 0; s < spp_pass; ++s) {
-            const uint64_t index = uint64_t(pass * spp_pass + s);
-            Rng rng = Rng::for_sample(st.seed, pixel, index);
-            const Vec2 film_u = rng.uniform2();
-            const Vec2 lens_u = rng.uniform2();
-            const Vec2 raster(x + film_u.x, y + film_u.y);
-            const CameraRay cr = cam.generate_ray(raster, lens_u);
-            const Rgb v = cr.weight > 0 ? cr.weight * radiance(world, cr.ray, st.max_depth, rng) : Rgb(0.0);
-            tile.add_sample(raster, v, index);
-          }
-        }
+      for_each_camera_sample(tile, film.width(), st, pass, spp_pass, [&](int x, int y, uint64_t index, Rng& rng) {
+        const Vec2 film_u = rng.uniform2();
+        const Vec2 lens_u = rng.uniform2();
+        const Vec2 raster(x + film_u.x, y + film_u.y);
+        const CameraRay cr = cam.generate_ray(raster, lens_u);
+        const Rgb v = cr.weight > 0 ? cr.weight * radiance(world, cr.ray, st.max_depth, rng) : Rgb(0.0);
+        tile.add_sample(raster, v, index);
+      });
     });
-    film.end_pass();
-    ++done;
-    st.progress(double(done) / double(passes));
-    if (st.time_budget_s > 0 &&
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > st.time_budget_s)
-      break;
-  }
-  return done;
+    return 0.0;
+  });
 }
 
 }  // namespace tb
