@@ -401,37 +401,42 @@ int64_t render_mmlt(const World& world, const RenderSettings& settings, const ps
   return pss::run_pss(f, settings, p, film, stats);
 }
 
-int64_t render_pssmlt(const World& world, const RenderSettings& settings, Film& film) {
+namespace {
+
+// A registered PSS renderer: default settings (`adjust` may change them), statistics into the
+// run report.
+template <class Render, class Adjust>
+int64_t render_reported(Render render, const World& world, const RenderSettings& settings, Film& film,
+                        Adjust adjust, const char* small_step_name = "small step") {
   pss::PssSettings p;
+  adjust(p);
   pss::PssStats stats;
-  const int64_t passes = render_pssmlt(world, settings, p, film, &stats);
-  pss::fill_report(stats, settings.report);
+  const int64_t passes = render(world, settings, p, film, &stats);
+  pss::fill_report(stats, settings.report, small_step_name);
   return passes;
+}
+
+using RenderFn = int64_t (*)(const World&, const RenderSettings&, const pss::PssSettings&, Film&, pss::PssStats*);
+constexpr auto kDefaults = [](pss::PssSettings&) {};
+
+}  // namespace
+
+int64_t render_pssmlt(const World& world, const RenderSettings& settings, Film& film) {
+  return render_reported(static_cast<RenderFn>(render_pssmlt), world, settings, film, kDefaults);
 }
 
 int64_t render_pssmlt_pt(const World& world, const RenderSettings& settings, Film& film) {
-  pss::PssSettings p;
-  pss::PssStats stats;
-  const int64_t passes = render_pssmlt_pt(world, settings, p, film, &stats);
-  pss::fill_report(stats, settings.report);
-  return passes;
+  return render_reported(static_cast<RenderFn>(render_pssmlt_pt), world, settings, film, kDefaults);
 }
 
 int64_t render_mmlt(const World& world, const RenderSettings& settings, Film& film) {
-  pss::PssSettings p;
-  pss::PssStats stats;
-  const int64_t passes = render_mmlt(world, settings, p, film, &stats);
-  pss::fill_report(stats, settings.report);
-  return passes;
+  return render_reported(static_cast<RenderFn>(render_mmlt), world, settings, film, kDefaults);
 }
 
 int64_t render_pssmlt_pt_rescaled(const World& world, const RenderSettings& settings, Film& film) {
-  pss::PssSettings p;
-  p.rescale.enabled = true;
-  pss::PssStats stats;
-  const int64_t passes = render_pssmlt_pt(world, settings, p, film, &stats);
-  pss::fill_report(stats, settings.report, "rescaled small step");
-  return passes;
+  return render_reported(
+      static_cast<RenderFn>(render_pssmlt_pt), world, settings, film,
+      [](pss::PssSettings& p) { p.rescale.enabled = true; }, "rescaled small step");
 }
 
 }  // namespace tb
