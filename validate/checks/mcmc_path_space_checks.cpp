@@ -16,10 +16,18 @@
 //    have a Dirac vertex and the mutation applies), lens and caustic chi-square on specular chains;
 //  - mlt.path_space.{mixture,lens}.flux_bins: flux symmetry by bins (pixel block x path length),
 //    binomial test per bin pair, Šidák over pairs, alpha = 1e-5 (flux_bins.h);
+//  - mlt.path_space.dirac.multi_chain.angle_chi2: the multi-chain perturbation's direction change at
+//    its continued level, given a fixed raster offset, against the stated density (chi-square);
 //  - mlt.path_space.image.{cornell,caustic}: render_mlt against BDPT with chains as Welch samples;
+//  - mlt.path_space.study.caustic_16: registered only when TB_MLT_STUDY_SEEDS is set (opt-in
+//    measurement, not a test): the 16 x 16 caustic comparison per seed with and without low-visit
+//    masks and the between-seed pooled means of the low-visit pixels (docs/mlt-path-space.md);
 //  - negative controls, passing when the broken variant IS rejected: the lens perturbation with
 //    its T ratio dropped (pairwise), the bidirectional density without a geometry term (pairwise,
-//    chi-square, net flux and image), the mixture accepting with pi(y) / pi(x) only (pairwise).
+//    chi-square, net flux and image), the mixture accepting with pi(y) / pi(x) only (pairwise), the
+//    multi-chain density stated with angular radius theta2 = 0.2 instead of 0.1 (chi-square).
+#include <algorithm>
+#include <cstdlib>
 #include <functional>
 #include <map>
 #include <memory>
@@ -32,6 +40,7 @@
 #include "estimators/mcmc/proposal_mixture.h"
 #include "lib/core/hash.h"
 #include "lib/integrator/bdpt.h"
+#include "lib/mcmc/pss/pss_driver.h"
 #include "lib/mcmc/path_space/flux_bins.h"
 #include "lib/mcmc/path_space/mlt.h"
 #include "lib/mcmc/path_space/net_flux.h"
@@ -338,6 +347,73 @@ CheckResult caustic_chi2(const CheckContext& cx, const std::string& name, bool s
   return chi2_record(runs, "direction change (phi, ln theta)");
 }
 
+// Multi-chain perturbation: the direction change at the first continued level, conditional on a fixed
+// raster offset (proposal_projections.h, MultiChainAngleProjection), on paths with exactly one
+// continued level (D S+ D S* E with the second chain ending at the emitter or a kept vertex) of each
+// Dirac scene (searched among 20000 BDPT paths; a scene without one is reported as skipped; none
+// skipped means at least one configuration is required). Negative control
+// (stated_theta2 != 0.1): T stated by a kernel with another angular radius theta2.
+CheckResult multi_chain_chi2(const CheckContext& cx, const std::string& name, double stated_theta2 = 0.1) {
+  std::vector<std::pair<std::string, SamplerChi2Result>> runs;
+  std::string skipped;
+  const bool control = stated_theta2 != 0.1;  // caught by far: one configuration, fewer samples
+  const std::vector<std::string> files = control ? std::vector<std::string>{"caustic.json"} : dirac_scenes();
+  const size_t per_scene = cx.full ? 2 : 1;
+  const int cells = cx.full && !control ? 41 : 21;  // per axis
+  for (const auto& file : files) {
+    const CornellScene& sc = scene(file);
+    const MultiChainPerturbation mc(sc.ctx);
+    const MultiChainPerturbation stated(sc.ctx, 0.1, 0.0, 1e-4, stated_theta2);
+    // Configurations (path, fixed offset uniforms) whose move succeeds for at least half of 64 pilot
+    // proposals: elsewhere the success region in (phi, ln theta) is a sliver the quadrature of the
+    // expected counts cannot resolve. One per scene (two at full size), from the first paths found.
+    std::vector<std::pair<MltPath, Vec2>> configs;
+    const Vec2 offsets[] = {{0.3, 0.9}, {0.8, 0.95}, {0.55, 0.7}, {0.05, 0.8}, {0.3, 0.5}, {0.8, 0.9}};
+    for (uint64_t i = 0; i < 20000 && configs.size() < per_scene; ++i) {
+      Rng r = Rng::for_sample(cx.seed + 30, 0x6d756c7469ULL, i);
+      RngUniforms u(r);
+      auto p = sample_bdpt_path(sc.ctx, u, kMaxDepth);
+      if (!p || mc.levels(*p).size() != 2) continue;
+      for (const Vec2 uo : offsets) {
+        const MultiChainAngleProjection pilot{&mc, &mc, &sc.ctx, *p, uo};
+        int ok = 0;
+        for (uint64_t t = 0; t < 64; ++t) {
+          Rng rp = Rng::for_sample(cx.seed + 31, i, t);
+          RngUniforms up(rp);
+          ok += pilot.sample(up).has_value();
+        }
+        if (ok >= 32) {
+          configs.emplace_back(*p, uo);
+          if (configs.size() == per_scene) break;
+        }
+      }
+    }
+    if (configs.empty()) {
+      skipped += (skipped.empty() ? "" : ", ") + file;
+      continue;
+    }
+    for (const auto& [x, uo] : configs) {
+      const MultiChainAngleProjection proj{&mc, &stated, &sc.ctx, x, uo};
+      SamplerChi2Options o;
+      o.samples = control ? 6000 : cx.size(10000, 300000);
+      o.seed = cx.seed;
+      o.key = hash_values(hash_string(name + file), static_cast<uint64_t>(runs.size()));
+      o.quadrature_max_depth = 3;
+      const std::vector<int> lv = mc.levels(x);
+      runs.emplace_back(fmt::format("{} k={} levels={},{} u_offset=({},{})", file, x.segments(), lv[0], lv[1], uo.x, uo.y),
+                        chi2_test(
+                            Chi2Domain::rectangle(proj.chart_lo(), proj.chart_hi(), cells, cells),
+                            [&](Uniforms& u) { return proj.sample(u); }, [&](const Vec2& q) { return proj.pdf(q); },
+                            o));
+    }
+  }
+  CheckResult res = chi2_record(runs, "direction change at the first continued level given the raster offset "
+                                      "(phi, ln theta)");
+  if (runs.empty()) res.passed = false;  // nothing tested
+  if (!skipped.empty()) res.message += fmt::format(" [no path with one continued level in {}]", skipped);
+  return res;
+}
+
 // ---- net flux: antisymmetric statistics of chains from importance-resampled starts (net_flux.h) ----
 CheckResult net_flux_check(BidirFault fault, const CheckContext& cx, const std::string& name) {
   const CornellScene& sc = cornell();
@@ -473,7 +549,8 @@ CheckResult flux_bins_check(LensFault lens_fault, bool lens_only, const CheckCon
 // ---- image: render_mlt against BDPT -----------------------------------------------------------------
 // 8 x 8 Cornell box, max depth 3; each chain is one Welch sample (docs/mlt-path-space.md: the
 // estimator is unbiased for every chain length), compared per pixel-channel with a BDPT image
-// (compare_channels: Šidák over pixels and channels, Stouffer, sum z^2) at alpha = 1e-5.
+// (compare_channels: Šidák over pixels and channels, Stouffer, sum z^2) at alpha = 1e-5. No low-visit
+// mask: at 16 x 16 it did not make the comparison consistent (docs/mlt-path-space.md, study below).
 CheckResult image_check(const MltOptions& opt, const CheckContext& cx, const std::string& name,
                         const std::string& file = "cornell-box.json") {
   const std::unique_ptr<World> world = load_scene_at_resolution(file, 8, 8);
@@ -505,6 +582,150 @@ CheckResult image_check(const MltOptions& opt, const CheckContext& cx, const std
   res.details["mutations_per_second"] = s.mutations_per_second();
   for (const auto& m : s.mutations) res.details["acceptance_" + m.name] = m.acceptance_rate();
   return res;
+}
+
+// ---- study (opt-in): the 16 x 16 caustic comparison of docs/mlt-path-space.md ---------------------
+// Registered only when TB_MLT_STUDY_SEEDS is set (comma-separated seeds); prints per-seed p-values
+// with and without the low-visit mask and the pooled per-pixel means of the low-visit pixels.
+CheckResult caustic_study(const CheckContext& cx) {
+  const char* env = std::getenv("TB_MLT_STUDY_SEEDS");
+  std::vector<uint64_t> seeds;
+  for (const char* c = env; c && *c;) {
+    char* e = nullptr;
+    seeds.push_back(std::strtoull(c, &e, 10));
+    c = (*e == ',') ? e + 1 : e;
+  }
+  const int res = 16;
+  const int64_t chains = std::getenv("TB_MLT_STUDY_CHAINS") ? std::atoll(std::getenv("TB_MLT_STUDY_CHAINS")) : 512;
+  const int64_t per_chain = 2048;
+  const std::unique_ptr<World> world = load_scene_at_resolution("caustic.json", res, res);
+  const int max_depth = world->integrator_defaults().value("max_depth", 10);
+  const size_t P = static_cast<size_t>(res * res);
+  std::vector<double> m_sum(P, 0), m_var(P, 0), r_sum(P, 0), r_var(P, 0), vis(P, 0);
+  std::vector<double> group_m[3], group_r[3];
+  std::map<size_t, std::vector<double>> fix_m, fix_r;
+  // Mean and between-seed standard error of the mean.
+  const auto msd = [](const std::vector<double>& v) {
+    double m = 0, q = 0;
+    for (double x : v) m += x;
+    m /= double(v.size());
+    for (double x : v) q += (x - m) * (x - m);
+    return std::pair<double, double>{m, std::sqrt(q / double(v.size() - 1) / double(v.size()))};
+  };
+  for (uint64_t seed : seeds) {
+    Film ref(res, res);
+    RenderSettings rs;
+    rs.spp = 4096;
+    rs.passes = 64;
+    rs.max_depth = max_depth;
+    rs.seed = hash_values(seed, hash_string("study.bdpt"));
+    render_bdpt(*world, rs, ref);
+    Film film(res, res);
+    RenderSettings st;
+    st.passes = static_cast<int>(chains);
+    st.spp = chains * per_chain / static_cast<int64_t>(P);
+    st.max_depth = max_depth;
+    st.seed = hash_values(seed, hash_string("study.mlt"));
+    run_mlt(*world, st, film, {});
+    std::vector<Rgb> refimg(P);
+    for (size_t i = 0; i < P; ++i) refimg[i] = ref.welch().mean(i);
+    const std::vector<double> visits = pss::expected_visits(refimg, per_chain);
+    std::string line = fmt::format("seed {}:", seed);
+    for (double thr : {0.0, 1.0, 2.0, 4.0, 8.0, 16.0}) {
+      std::vector<bool> mask(P);
+      int64_t ex = 0;
+      for (size_t i = 0; i < P; ++i) ex += (mask[i] = visits[i] < thr);
+      WelchImage a = film.welch(), b = ref.welch();
+      exclude_pixels(a, b, mask);
+      const ChannelCompare c = compare_channels(a, b, 0.01);
+      line += fmt::format(" [thr {} excl {} p {:.3g} mrd {:.3g}]", thr, ex, c.p_value(), c.mean_relative_difference());
+    }
+    // Worst pixels by |t| (luminance).
+    std::vector<std::pair<double, size_t>> t;
+    for (size_t i = 0; i < P; ++i) {
+      const double ma = luminance(film.welch().mean(i)), mb = luminance(refimg[i]);
+      const double va = luminance(film.welch().variance(i)) / double(film.welch().count[i]);
+      const double vb = luminance(ref.welch().variance(i)) / double(ref.welch().count[i]);
+      t.emplace_back(std::abs(ma - mb) / std::sqrt(va + vb + 1e-300), i);
+      m_sum[i] += ma;
+      m_var[i] += va;
+      r_sum[i] += mb;
+      r_var[i] += vb;
+      vis[i] += visits[i];
+    }
+    std::sort(t.rbegin(), t.rend());
+    for (int g = 0; g < 3; ++g) {
+      const double thr = g == 0 ? 1.0 : g == 1 ? 4.0 : 8.0;
+      double dm = 0, dr = 0;
+      for (size_t i = 0; i < P; ++i)
+        if (visits[i] < thr) dm += luminance(film.welch().mean(i)), dr += luminance(refimg[i]);
+      group_m[g].push_back(dm);
+      group_r[g].push_back(dr);
+    }
+    for (const auto& [px, py] : std::vector<std::pair<int, int>>{{5, 9}, {9, 10}, {5, 10}, {4, 10}, {8, 4}, {7, 4}}) {
+      const size_t i = static_cast<size_t>(py * res + px);
+      fix_m[i].push_back(luminance(film.welch().mean(i)));
+      fix_r[i].push_back(luminance(refimg[i]));
+    }
+    for (int w = 0; w < 2; ++w) {
+      const size_t i = t[static_cast<size_t>(w)].second;
+      const double s1 = luminance(film.welch().sum[i]), s2 = luminance(film.welch().sum_sq[i]);
+      line += fmt::format("\n   px ({},{}) |t| {:.2f} visits/chain {:.3g} mlt {:.4g} ref {:.4g}+-{:.2g} neff_chains {:.3g}",
+                          i % res, i / res, t[static_cast<size_t>(w)].first, visits[i], luminance(film.welch().mean(i)),
+                          luminance(refimg[i]), std::sqrt(luminance(ref.welch().variance(i)) / 64.0),
+                          s2 > 0 ? s1 * s1 / s2 : 0.0);
+    }
+    fmt::print(stderr, "{}\n", line);
+  }
+  // Pooled over seeds: low-visit pixel groups.
+  const double S = static_cast<double>(seeds.size());
+  for (double thr : {1.0, 4.0, 8.0, 32.0}) {
+    double dm = 0, vm = 0, dr = 0, vr = 0;
+    int n = 0;
+    for (size_t i = 0; i < P; ++i)
+      if (vis[i] / S < thr) {
+        dm += m_sum[i] / S;
+        vm += m_var[i] / (S * S);
+        dr += r_sum[i] / S;
+        vr += r_var[i] / (S * S);
+        ++n;
+      }
+    fmt::print(stderr, "pooled over {} seeds, {} pixels with < {} visits/chain: sum of means mlt {:.5g} +- {:.2g}, bdpt {:.5g} +- {:.2g}, z {:.2f}\n",
+               seeds.size(), n, thr, dm, std::sqrt(vm), dr, std::sqrt(vr), (dm - dr) / std::sqrt(vm + vr + 1e-300));
+  }
+  for (int g = 0; g < 3; ++g) {
+    const auto [a, sa] = msd(group_m[g]);
+    const auto [b, sb] = msd(group_r[g]);
+    fmt::print(stderr, "between-seed: group {} mlt {:.5g} +- {:.2g} bdpt {:.5g} +- {:.2g} z {:.2f}\n", g, a, sa, b, sb,
+               (a - b) / std::sqrt(sa * sa + sb * sb));
+  }
+  for (const auto& [i, v] : fix_m) {
+    const auto [a, sa] = msd(v);
+    const auto [b, sb] = msd(fix_r[i]);
+    int zeros = 0;
+    for (double x : v) zeros += x < 0.2 * b;
+    fmt::print(stderr, "between-seed px ({},{}): mlt {:.4g} +- {:.2g} bdpt {:.4g} +- {:.2g} z {:.2f}; seeds with mlt < 0.2 bdpt: {}\n",
+               i % res, i / res, a, sa, b, sb, (a - b) / std::sqrt(sa * sa + sb * sb), zeros);
+  }
+  // Per pixel pooled z for the low-visit pixels, the worst few.
+  std::vector<std::pair<double, size_t>> z;
+  for (size_t i = 0; i < P; ++i) z.emplace_back((m_sum[i] - r_sum[i]) / S / std::sqrt((m_var[i] + r_var[i]) / (S * S) + 1e-300), i);
+  std::sort(z.begin(), z.end());
+  for (int w = 0; w < 5; ++w) {
+    const size_t i = z[static_cast<size_t>(w)].second;
+    fmt::print(stderr, "pooled px ({},{}) z {:.2f} visits/chain {:.3g} mlt {:.4g} bdpt {:.4g}\n", i % res, i / res,
+               z[static_cast<size_t>(w)].first, vis[i] / S, m_sum[i] / S, r_sum[i] / S);
+  }
+  for (int w = 0; w < 3; ++w) {
+    const size_t i = z[z.size() - 1 - static_cast<size_t>(w)].second;
+    fmt::print(stderr, "pooled px ({},{}) z {:.2f} visits/chain {:.3g} mlt {:.4g} bdpt {:.4g}\n", i % res, i / res,
+               z[z.size() - 1 - static_cast<size_t>(w)].first, vis[i] / S, m_sum[i] / S, r_sum[i] / S);
+  }
+  (void)cx;
+  CheckResult r;
+  r.passed = true;
+  r.message = "study printed to stderr";
+  return r;
 }
 
 void add(const std::string& name, const std::string& desc, CheckKind kind,
@@ -583,12 +804,24 @@ const bool registered = [] {
       "Caustic perturbation through a specular chain: realised direction change against the stated density "
       "(chi-square)",
       CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) { return caustic_chi2(cx, n, true); });
+  add(p + "dirac.multi_chain.angle_chi2",
+      "Multi-chain perturbation: realised direction change at the continued level (given the raster offset) "
+      "against the stated density (chi-square)",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) { return multi_chain_chi2(cx, n); });
+  add(p + "negative_control.dirac.multi_chain_wrong_radius.angle_chi2",
+      "Negative control: the multi-chain chi-square must reject T stated with the angular radius theta2 = 0.2 "
+      "(sampled with 0.1)",
+      CheckKind::kStatistical,
+      [](const CheckContext& cx, const std::string& n) { return negate(multi_chain_chi2(cx, n, 0.2)); });
   add(p + "negative_control.dirac.lens_missing_ratio.pairwise",
       "Negative control: the pairwise check must reject the lens perturbation with T(y->x)/T(x->y) dropped on "
       "paths through Dirac vertices",
       CheckKind::kDeterministic, [](const CheckContext& cx, const std::string& n) {
         return negate(lens_pairwise(LensFault::kDropDensityRatio, cx, n, "caustic.json", true));
       });
+  if (std::getenv("TB_MLT_STUDY_SEEDS"))
+    add(p + "study.caustic_16", "opt-in study (TB_MLT_STUDY_SEEDS): 16 x 16 caustic MLT against BDPT",
+        CheckKind::kDeterministic, [](const CheckContext& cx, const std::string&) { return caustic_study(cx); });
   add(p + "image.caustic",
       "render_mlt (>= 48 chains as Welch samples) against BDPT on the 8 x 8 caustic scene (glass sphere: specular "
       "chains)",

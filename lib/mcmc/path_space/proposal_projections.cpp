@@ -5,7 +5,9 @@
 #include "lib/core/frame.h"
 #include "lib/geometry/spawn.h"
 #include "lib/mcmc/path_space/start_paths.h"
+#include "lib/path/dirac.h"
 #include "lib/path/measure.h"
+#include "lib/path/path.h"
 
 namespace tb::path_space {
 
@@ -87,6 +89,66 @@ double CausticAngleProjection::pdf(const Vec2& q) const {
 
 Vec2 CausticAngleProjection::chart_lo() const { return {0.0, std::log(caustic->theta1()) - 0.2}; }
 Vec2 CausticAngleProjection::chart_hi() const { return {2 * kPi, std::log(caustic->theta2()) + 0.2}; }
+
+namespace {
+// The first two uniforms fixed (the multi-chain offset), the rest from the stream.
+class OffsetFixedUniforms final : public Uniforms {
+ public:
+  OffsetFixedUniforms(Vec2 first, Uniforms& rest) : first_(first), rest_(&rest) {}
+  double next() override {
+    const int i = i_++;
+    return i == 0 ? first_.x : i == 1 ? first_.y : rest_->next();
+  }
+
+ private:
+  Vec2 first_;
+  Uniforms* rest_;
+  int i_ = 0;
+};
+
+// Direction from the apex at z_i (spawn_ray's origin towards z_{i-1}) to z_{i-1}; the apex.
+std::pair<Vec3, Vec3> apex_and_direction(const MltPath& z, int i) {
+  const Vec3 o = spawn_ray(z.v[i].hit, direction(z.v[i], z.v[i - 1])).o;
+  return {o, glm::normalize(z.v[i - 1].hit.p - o)};
+}
+}  // namespace
+
+std::optional<Vec2> MultiChainAngleProjection::sample(Uniforms& u) const {
+  OffsetFixedUniforms fu(u_offset, u);
+  const auto y = sampler->propose(x, fu);
+  if (!y) return std::nullopt;
+  const int j1 = sampler->levels(x).front();
+  const Vec3 wx = apex_and_direction(x, j1).second, wy = apex_and_direction(*y, j1).second;
+  const Vec3 local = Frame::from_z(wx).to_local(wy);
+  double phi = std::atan2(local.y, local.x);
+  if (phi < 0) phi += 2 * kPi;
+  const double theta = std::atan2(glm::length(glm::cross(wx, wy)), glm::dot(wx, wy));
+  return Vec2(phi, std::log(theta));
+}
+
+double MultiChainAngleProjection::jacobian(const MltPath& y, double theta) const {
+  const std::vector<int> lv = sampler->levels(x);
+  const int k = y.segments(), j1 = lv[0], j2 = lv[1];
+  const PathDensities d = path_densities(*ctx, y.v, DiracPolicy::kCoefficientKeptLobe);
+  double g = sampler->lens().kernel_density(sampler->lens().sample_offset(u_offset)) *
+             static_cast<double>(ctx->world->camera().pixel_count()) * d.pE[k - 1];
+  for (int i = k - 1; i > j1; --i) g *= d.pE[i - 1];  // chain 1 (specular y_i -> y_{i-1})
+  const Vec3 o = apex_and_direction(y, j1).first;
+  g *= solid_angle_to_area(1.0, o, y.v[j1 - 1].hit.p, y.v[j1 - 1].geometric_normal());
+  for (int i = j1 - 1; i > j2; --i) g *= d.pE[i - 1];  // chain 2
+  return g / (std::sin(theta) * theta);
+}
+
+double MultiChainAngleProjection::pdf(const Vec2& q) const {
+  const double theta = std::exp(q.y);
+  const auto y = sampler->perturb(x, sampler->lens().sample_offset(u_offset), {Vec2(theta, q.x)});
+  if (!y) return 0.0;
+  const double g = jacobian(*y, theta);
+  return g > 0.0 ? stated->density(x, *y) / g : 0.0;
+}
+
+Vec2 MultiChainAngleProjection::chart_lo() const { return {0.0, std::log(1e-4) - 0.2}; }
+Vec2 MultiChainAngleProjection::chart_hi() const { return {2 * kPi, std::log(0.1) + 0.2}; }
 
 MltPath path_with_segments(const PathContext& ctx, int k, int max_depth, uint64_t seed) {
   for (uint64_t i = 0;; ++i) {

@@ -22,6 +22,7 @@
 #include "lib/mcmc/path_space/bidirectional_mutation.h"
 #include "lib/mcmc/path_space/caustic_perturbation.h"
 #include "lib/mcmc/path_space/lens_perturbation.h"
+#include "lib/mcmc/path_space/multi_chain_perturbation.h"
 
 namespace tb::path_space {
 
@@ -50,6 +51,20 @@ struct CausticAngleProjection {
   double pdf(const Vec2& phi_rho) const;
   Vec2 chart_lo() const;
   Vec2 chart_hi() const;
+};
+
+struct MultiChainAngleProjection {
+  const MultiChainPerturbation* sampler = nullptr;
+  const MultiChainPerturbation* stated = nullptr;
+  const PathContext* ctx = nullptr;
+  MltPath x;    // levels(x).size() == 2
+  Vec2 u_offset{0.3, 0.5};  // the fixed uniforms of the raster offset
+  std::optional<Vec2> sample(Uniforms& u) const;
+  double pdf(const Vec2& phi_rho) const;
+  Vec2 chart_lo() const;
+  Vec2 chart_hi() const;
+  // Jacobian from (phi, theta) at the level (given d0) to the path measure, times K_r(d0); see above.
+  double jacobian(const MltPath& y, double theta) const;
 };
 
 // A BDPT-sampled path with exactly k segments (deterministic in seed).
