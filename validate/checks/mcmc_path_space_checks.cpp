@@ -585,7 +585,8 @@ CheckResult image_check(const MltOptions& opt, const CheckContext& cx, const std
 }
 
 // ---- study (opt-in): the 16 x 16 caustic comparison of docs/mlt-path-space.md ---------------------
-// Registered only when TB_MLT_STUDY_SEEDS is set (comma-separated seeds); prints per-seed p-values
+// Registered only when TB_MLT_STUDY_SEEDS is set (comma-separated seeds; TB_MLT_STUDY_SCENE and
+// TB_MLT_STUDY_CHAINS change the scene and the chains per seed); prints per-seed p-values
 // with and without the low-visit mask and the pooled per-pixel means of the low-visit pixels.
 CheckResult caustic_study(const CheckContext& cx) {
   const char* env = std::getenv("TB_MLT_STUDY_SEEDS");
@@ -598,7 +599,9 @@ CheckResult caustic_study(const CheckContext& cx) {
   const int res = 16;
   const int64_t chains = std::getenv("TB_MLT_STUDY_CHAINS") ? std::atoll(std::getenv("TB_MLT_STUDY_CHAINS")) : 512;
   const int64_t per_chain = 2048;
-  const std::unique_ptr<World> world = load_scene_at_resolution("caustic.json", res, res);
+  // TB_MLT_STUDY_SCENE: another shipped scene file (default caustic.json).
+  const std::string file = std::getenv("TB_MLT_STUDY_SCENE") ? std::getenv("TB_MLT_STUDY_SCENE") : "caustic.json";
+  const std::unique_ptr<World> world = load_scene_at_resolution(file, res, res);
   const int max_depth = world->integrator_defaults().value("max_depth", 10);
   const size_t P = static_cast<size_t>(res * res);
   std::vector<double> m_sum(P, 0), m_var(P, 0), r_sum(P, 0), r_var(P, 0), vis(P, 0);
