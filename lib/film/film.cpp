@@ -55,6 +55,7 @@ void Film::merge_splats(const SplatBuffer& s) {
 void Film::end_pass(double splat_scale) {
   if (pass_splats_ > 0 && splat_scale == 0.0)
     throw std::logic_error("Film::end_pass: the pass holds splats but splat_scale is 0 (use P / N for N paths)");
+  if (observer_) observed_.assign(welch_.pixels(), Rgb(0.0));
   for (int y = 0; y < height_; ++y)
     for (int x = 0; x < width_; ++x) {
       const size_t i = size_t(y) * size_t(width_) + size_t(x);
@@ -65,7 +66,9 @@ void Film::end_pass(double splat_scale) {
       else
         ++empty_pixel_passes_;
       welch_.add(i, v);
+      if (observer_) observed_[i] = v;
     }
+  if (observer_) observer_(observed_);
   pass_.clear();
   std::fill(pass_splat_.begin(), pass_splat_.end(), Rgb(0.0));
   pass_splats_ = 0;

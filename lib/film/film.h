@@ -13,6 +13,7 @@
 // bit-identical whatever the thread count.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -47,6 +48,12 @@ class Film {
   // dropped silently).
   void end_pass(double splat_scale = 0.0);
 
+  // Called by end_pass with the pass's Welch sample of every pixel (row-major), before they are
+  // added to welch(): checks that need more than per-pixel moments (sums over groups of pixels,
+  // validate/render/pixel_groups.h) read the passes here. Empty: no call.
+  using PassObserver = std::function<void(const std::vector<Rgb>& pass)>;
+  void set_pass_observer(PassObserver observer) { observer_ = std::move(observer); }
+
   int64_t passes() const { return passes_; }
   int64_t empty_pixel_passes() const { return empty_pixel_passes_; }
   int64_t splats_outside() const { return splats_outside_; }
@@ -67,6 +74,8 @@ class Film {
   int64_t pass_splats_ = 0;        // splats merged in the current pass
   NonFiniteLog nonfinite_;         // of closed and current passes
   SplatBuffer direct_splats_;      // scratch for splat()
+  PassObserver observer_;
+  std::vector<Rgb> observed_;      // the pass handed to observer_
 };
 
 }  // namespace tb
