@@ -244,11 +244,11 @@ std::shared_ptr<const Film> bdpt_reference(const CornellBox& box, const ImageSiz
   return film;
 }
 
-enum class Variant { kPssmlt, kMmlt, kMsmlt, kPssmltPtRescaled };
+enum class Variant { kPssmlt, kMmlt, kMsmlt, kPssmltPtRescaled, kPssmltPt, kMsmltMmlt };
 
 CheckResult run_image(const CheckContext& ctx, Variant variant, PssFault fault, const std::string& name,
                       const std::string& scene = "cornell-box.json") {
-  const bool mmlt = variant == Variant::kMmlt;
+  const bool mmlt = variant == Variant::kMmlt || variant == Variant::kMsmltMmlt;
   ImageSize sz = image_size(ctx, scene);
   if (fault != PssFault::kNone) sz.spp_pass = std::max<int64_t>(8, sz.spp_pass / 4);  // caught by far
   if (fault == PssFault::kSplatThroughput) sz.spp_pass = std::max<int64_t>(4, sz.spp_pass / 2);  // +700%: by far
@@ -280,6 +280,11 @@ CheckResult run_image(const CheckContext& ctx, Variant variant, PssFault fault, 
       p.rescale.enabled = true;
       render_pssmlt_pt(*box.world, st, p, film, &stats);
       break;
+    case Variant::kPssmltPt: render_pssmlt_pt(*box.world, st, p, film, &stats); break;
+    case Variant::kMsmltMmlt:
+      render_msmlt_mmlt(*box.world, st, p, ms, film, &ms_stats);
+      stats = ms_stats.final_stage;
+      break;
   }
   const std::vector<double> visits = expected_visits(ref->mean_image(), N);
   std::vector<bool> mask(visits.size());
@@ -300,7 +305,7 @@ CheckResult run_image(const CheckContext& ctx, Variant variant, PssFault fault, 
                            {"seed", st.seed}, {"chains_per_pass", p.chains}, {"bootstrap", p.bootstrap},
                            {"large_step_probability", p.large_step_probability}, {"sigma", p.sigma},
                            {"rescaled", p.rescale.enabled}};
-  if (variant == Variant::kMsmlt) {
+  if (variant == Variant::kMsmlt || variant == Variant::kMsmltMmlt) {
     r.details["settings"]["multi_stage"] = {{"base", ms.base}, {"stages", ms.stages}, {"floor_fraction", ms.floor_fraction},
                                             {"stage_budget", ms.stage_budget}};
     r.details["guide_stages"] = {{"mutations", ms_stats.guides.mutations},
@@ -418,13 +423,18 @@ const bool registered = [] {
                                    return run_image(ctx, variant, fault, name);
                                  }});
   }
-  // Every variant on the glossy and the caustic scene too (issue: Cornell box, glossy, caustic).
-  for (const char* scene : {"glossy", "caustic"})
+  // Every variant on the glossy and the caustic scene too (issue: Cornell box, glossy, caustic);
+  // pssmlt-pt and msmlt-mmlt on all three.
+  for (const char* scene : {"cornell", "glossy", "caustic"})
     for (auto [variant, label] : {std::pair{Variant::kPssmlt, "pssmlt"}, std::pair{Variant::kMmlt, "mmlt"},
                                   std::pair{Variant::kMsmlt, "msmlt"},
-                                  std::pair{Variant::kPssmltPtRescaled, "pssmlt_pt_rescaled"}}) {
+                                  std::pair{Variant::kPssmltPtRescaled, "pssmlt_pt_rescaled"},
+                                  std::pair{Variant::kPssmltPt, "pssmlt_pt"},
+                                  std::pair{Variant::kMsmltMmlt, "msmlt_mmlt"}}) {
+      const bool new_variant = variant == Variant::kPssmltPt || variant == Variant::kMsmltMmlt;
+      if (std::string(scene) == "cornell" && !new_variant) continue;  // registered above
+      const std::string file = std::string(scene) == "cornell" ? "cornell-box.json" : std::string(scene) + ".json";
       const std::string name = fmt::format("render.{}.{}.unbiased", label, scene);
-      const std::string file = std::string(scene) + ".json";
       const Variant v = variant;
       Registry::global().add(Check{
           .name = name,
@@ -433,6 +443,19 @@ const bool registered = [] {
           .kind = CheckKind::kStatistical,
           .run = [name, v, file](const CheckContext& ctx) { return run_image(ctx, v, PssFault::kNone, name, file); }});
     }
+  // The negative control of the image check on the glossy and the caustic scene as well.
+  for (const char* scene : {"glossy", "caustic"}) {
+    const std::string name = fmt::format("render.pssmlt.negative_control.no_rejected_splat.{}", scene);
+    const std::string file = std::string(scene) + ".json";
+    Registry::global().add(Check{
+        .name = name,
+        .description = fmt::format("PSSMLT without the (1 - a) splat of the current state must be rejected on the {} scene",
+                                   scene),
+        .kind = CheckKind::kStatistical,
+        .run = [name, file](const CheckContext& ctx) {
+          return run_image(ctx, Variant::kPssmlt, PssFault::kNoRejectedSplat, name, file);
+        }});
+  }
   for (auto [pt, no_ratio] : {std::pair{false, false}, std::pair{true, false}, std::pair{false, true}}) {
     const std::string name = no_ratio ? "mcmc.pss.negative_control.rescaled_no_ratio.pairwise"
                                       : fmt::format("mcmc.pss.cornell.{}.rescaled_small_step.pairwise", pt ? "pssmlt_pt" : "pssmlt");
