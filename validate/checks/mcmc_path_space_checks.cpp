@@ -550,6 +550,23 @@ CheckResult flux_bins_check(LensFault lens_fault, bool lens_only, const CheckCon
   return res;
 }
 
+// The check record of an MLT image comparison: p, chains, mutations, acceptance per mutation.
+CheckResult image_record(const ChannelCompare& c, const MltStats& s, const std::string& setup) {
+  CheckResult res;
+  res.passed = !c.rejects();
+  res.statistic_name = "p";
+  res.statistic = c.p_value();
+  res.p_value = c.p_value();
+  res.alpha = kAlpha;
+  res.samples = s.mutations_total;
+  res.message = fmt::format("{} chains x {} mutations against BDPT{}: {}", s.chains,
+                            s.mutations_total / std::max<int64_t>(1, s.chains), setup, c.message());
+  res.details = c.details();
+  res.details["mutations_per_second"] = s.mutations_per_second();
+  for (const auto& m : s.mutations) res.details["acceptance_" + m.name] = m.acceptance_rate();
+  return res;
+}
+
 // ---- image: render_mlt against BDPT -----------------------------------------------------------------
 // 8 x 8 Cornell box, max depth 3; each chain is one Welch sample (docs/mlt-path-space.md: the
 // estimator is unbiased for every chain length), compared per pixel-channel with a BDPT image
@@ -572,20 +589,7 @@ CheckResult image_check(const MltOptions& opt, const CheckContext& cx, const std
   st.max_depth = 3;
   st.seed = hash_values(cx.seed, hash_string(name));
   const MltStats s = run_mlt(*world, st, film, opt);
-  const ChannelCompare c = compare_channels(film.welch(), ref.welch(), kAlpha);
-  CheckResult res;
-  res.passed = !c.rejects();
-  res.statistic_name = "p";
-  res.statistic = c.p_value();
-  res.p_value = c.p_value();
-  res.alpha = kAlpha;
-  res.samples = s.mutations_total;
-  res.message = fmt::format("{} chains x {} mutations against BDPT: {}", s.chains, s.mutations_total / std::max<int64_t>(1, s.chains),
-                            c.message());
-  res.details = c.details();
-  res.details["mutations_per_second"] = s.mutations_per_second();
-  for (const auto& m : s.mutations) res.details["acceptance_" + m.name] = m.acceptance_rate();
-  return res;
+  return image_record(compare_channels(film.welch(), ref.welch(), kAlpha), s, "");
 }
 
 // ---- image by pixel groups: render_mlt against BDPT where pixels are carried by few chains ----------
@@ -635,23 +639,12 @@ CheckResult grouped_image_check(const MltOptions& opt, const CheckContext& cx, c
   st.seed = hash_values(cx.seed, hash_string(name));
   const MltStats s = run_mlt(*world, st, film, opt);
   mlt_groups.detach(film);
-  const ChannelCompare c = compare_channels(mlt_groups.welch(), ref_groups.welch(), kAlpha);
-  CheckResult res;
-  res.passed = !c.rejects();
-  res.statistic_name = "p";
-  res.statistic = c.p_value();
-  res.p_value = c.p_value();
-  res.alpha = kAlpha;
-  res.samples = s.mutations_total;
   const int groups = group_count(ref_groups.groups());
-  res.message = fmt::format("{} chains x {} mutations against BDPT (max depth {}), {} pixel groups of >= {:.3g} of the "
-                            "image: {}",
-                            s.chains, s.mutations_total / std::max<int64_t>(1, s.chains), max_depth, groups,
-                            kStartsPerGroup / double(chains), c.message());
-  res.details = c.details();
+  CheckResult res = image_record(
+      compare_channels(mlt_groups.welch(), ref_groups.welch(), kAlpha), s,
+      fmt::format(" (max depth {}), {} pixel groups of >= {:.3g} of the image", max_depth, groups,
+                  kStartsPerGroup / double(chains)));
   res.details["groups"] = groups;
-  res.details["mutations_per_second"] = s.mutations_per_second();
-  for (const auto& m : s.mutations) res.details["acceptance_" + m.name] = m.acceptance_rate();
   return res;
 }
 
