@@ -351,6 +351,83 @@ CheckResult run_lazy_chi2(const CheckContext& ctx, bool misstated, const std::st
   return res;
 }
 
+// ---- the rescaled small step and the large step against their stated densities ------------------
+// Proposal chi-square (issue 6, "for every mutation: proposal samples against the stated density in
+// a low-dimensional projection"). Projection: the displacement d = y_0 - x_0 (wrapped to (-1/2,
+// 1/2]) of coordinate 0, the camera raster's first uniform, which every state reads, so that the
+// rescaled step moves it with sigma(x) (rescaled_step.h: D(x) ∩ D(y)). Stated marginal: the
+// coordinate-0 factor of RescaledSmallStep's T, the wrapped normal g_{sigma(x)} with
+// sigma(x) = sigma_at(pi(x)); the large step: uniform. Three states x of the 16x16 Cornell box
+// (PT target) with sigma(x) in [0.02, 0.1] (dim paths; on bright ones sigma reaches 1e-4, below the
+// 1/401 cell width); chi-square over 401 cells of d + 1/2, alpha 1e-5 Šidák over the three.
+// Negative control: the rescaled step's density stated with sigma 5 % too wide (VALIDATION.md E,
+// "a proposal whose stated density is 5 % off its true one").
+CheckResult run_step_chi2(const CheckContext& ctx, bool large, bool misstated, const std::string& name) {
+  constexpr int kRes = 16;
+  const CornellBox box(kRes);
+  RenderSettings rs;
+  rs.max_depth = kMaxDepth;
+  const SampleFunction f =
+      radiance_sample_function(kRes, kRes, [c = box.ctx, rs](const Vec2& r, Uniforms& u) { return pt_sample(c, rs, r, u); });
+  double b = 0.0;
+  Rng rng = Rng::for_sample(ctx.seed, hash_string(name + ".states"), 0);
+  DenseState x(kStreams * kPerStream);
+  for (int i = 0; i < 4096; ++i) {
+    for (double& v : x) v = rng.uniform();
+    b += evaluate_dense(f, 0, x).value / 4096.0;
+  }
+  StepRescaling resc;
+  resc.enabled = true;
+  const RescaledSmallStep step(f, 0, PssSettings{}.sigma, b, resc);
+  std::vector<DenseState> xs;
+  std::vector<double> sig;
+  for (int tries = 0; tries < 100000 && xs.size() < 3; ++tries) {
+    for (double& v : x) v = rng.uniform();
+    const double pi = evaluate_dense(f, 0, x).value;
+    const double sx = step.sigma_at(pi);
+    if (!(pi > 0.0) || sx < 0.02 || sx > 0.1) continue;
+    if (!sig.empty() && std::abs(sx - sig.back()) < 0.005) continue;  // spread the sigmas
+    xs.push_back(x);
+    sig.push_back(sx);
+  }
+  const double a = stats::sidak_alpha(kChi2Alpha, static_cast<int>(std::max<size_t>(1, xs.size())));
+  CheckResult res;
+  res.passed = xs.size() == 3;
+  res.statistic_name = "smallest p";
+  res.statistic = 1.0;
+  res.alpha = kChi2Alpha;
+  std::string msg;
+  bool any_reject = false;
+  for (size_t c = 0; c < xs.size(); ++c) {
+    const DenseState& x0 = xs[c];
+    const auto sample = [&](Uniforms& u) -> std::optional<double> {
+      const auto y = large ? LargeStep().propose(x0, u) : step.propose(x0, u);
+      if (!y) return std::nullopt;
+      double d = (*y)[0] - x0[0];
+      d -= std::round(d);  // (-1/2, 1/2]
+      return std::clamp(d + 0.5, 0.0, std::nextafter(1.0, 0.0));
+    };
+    const double stated = sig[c] * (misstated ? 1.05 : 1.0);
+    const auto pdf = [&](double v) { return large ? 1.0 : wrapped_normal_pdf(v - 0.5, stated); };
+    SamplerChi2Options o;
+    o.samples = ctx.size(100000, 400000);
+    o.seed = ctx.seed;
+    o.key = hash_values(hash_string(name), c);
+    const SamplerChi2Result r = chi2_test(Chi2Domain::interval(0.0, 1.0, 401), sample, pdf, o);
+    any_reject = any_reject || !r.passed(a);
+    res.statistic = std::min(res.statistic, r.p_value());
+    res.samples += r.samples;
+    msg += fmt::format("{}state {} (sigma(x) = {:.4f}): {}", c ? "; " : "", c, sig[c], r.message());
+  }
+  res.p_value = res.statistic;
+  res.passed = res.passed && (misstated ? any_reject : !any_reject);
+  res.message = fmt::format("{}{} against {} (each at {:.3g}): {}", misstated ? "negative control (must be rejected): " : "",
+                            large ? "large step, coordinate 0" : "rescaled small step, coordinate 0",
+                            large ? "uniform" : misstated ? "g_{1.05 sigma(x)}" : "g_{sigma(x)}", a, msg);
+  if (xs.size() != 3) res.message = "fewer than 3 states with sigma(x) in [0.02, 0.1] found; " + res.message;
+  return res;
+}
+
 // ---- images --------------------------------------------------------------------------------------
 
 struct ImageSize {
@@ -547,6 +624,20 @@ const bool registered = [] {
           }
           return r;
         }});
+  }
+  for (auto [large, misstated, nm] : {std::tuple{false, false, "mcmc.pss.rescaled_small_step.chi2"},
+                                      std::tuple{true, false, "mcmc.pss.large_step.chi2"},
+                                      std::tuple{false, true, "mcmc.pss.negative_control.rescaled_step_misstated.chi2"}}) {
+    const std::string name = nm;
+    const bool l = large, m = misstated;
+    Registry::global().add(Check{
+        .name = name,
+        .description = m ? "the rescaled PSS small step against a density 5% too wide must be rejected"
+                         : l ? "the PSS large step: displacement of coordinate 0 against the uniform density"
+                             : "the throughput-rescaled PSS small step: displacement of coordinate 0 against the "
+                               "stated wrapped normal of sigma(x), three states",
+        .kind = CheckKind::kStatistical,
+        .run = [l, m, name](const CheckContext& ctx) { return run_step_chi2(ctx, l, m, name); }});
   }
   for (bool misstated : {false, true}) {
     const std::string name = misstated ? "mcmc.pss.negative_control.lazy_step_misstated.chi2"
