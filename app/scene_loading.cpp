@@ -1,5 +1,6 @@
 #include "app/scene_loading.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
@@ -7,7 +8,6 @@
 #include <nlohmann/json.hpp>
 
 #include "lib/core/atomic_file.h"
-#include "lib/mcmc/pss/pss_driver.h"
 #include "lib/scene/scene_loader.h"
 
 namespace tb {
@@ -32,15 +32,16 @@ std::unique_ptr<World> load_scene_file(const std::string& path, const std::strin
 }
 
 // Samples per pixel per pass of a time-budgeted run (see scene_loading.h): 1, except for the
-// integrators on the primary-sample-space driver, whose every pass starts with a bootstrap of
-// PssSettings::bootstrap samples (100,000): n = ceil(bootstrap / P), so a pass's mutations are
-// at least as many as its bootstrap samples instead of a small fraction of them.
+// integrators on the primary-sample-space driver, whose every pass starts with a bootstrap of at
+// least 8192 samples (PssSettings::bootstrap_for): n = ceil(16384 / P), so that a pass's mutations
+// are at least twice its bootstrap (at 128 x 128 and above, one mutation per pixel per pass); and
+// multi-stage MLT, whose every pass also builds its guide images from scratch: n = ceil(131072 / P)
+// (8 at 128 x 128), so that the guides are not mostly noise (measured, docs/compare.md).
 int64_t default_pass_spp(const std::string& integrator, int64_t pixels) {
-  for (const char* prefix : {"pssmlt", "mmlt", "msmlt"})
-    if (integrator.rfind(prefix, 0) == 0) {
-      const int64_t boot = pss::PssSettings{}.bootstrap;
-      return std::max<int64_t>(1, (boot + pixels - 1) / pixels);
-    }
+  const auto at_least = [pixels](int64_t mutations) { return std::max<int64_t>(1, (mutations + pixels - 1) / pixels); };
+  if (integrator.rfind("msmlt", 0) == 0) return at_least(131072);
+  for (const char* prefix : {"pssmlt", "mmlt"})
+    if (integrator.rfind(prefix, 0) == 0) return at_least(16384);
   return 1;
 }
 

@@ -160,7 +160,7 @@ int64_t run_msmlt(const SampleFunction& f, const RenderSettings& st, const PssSe
           std::max<int64_t>(pss.chains, std::llround(ms.stage_budget * static_cast<double>(N) / static_cast<double>(area)));
       // The guide's scale cancels in pi (the floor is relative to its mean), so this stage's b
       // matters not at all; its bootstrap only has to supply the chains' starts.
-      pk.bootstrap = std::max<int64_t>(2 * pss.chains, pss.bootstrap / area);
+      pk.bootstrap = std::max<int64_t>(2 * pss.chains, pss.bootstrap_for(N, f.levels) / area);
       pk.count_visits = false;
       pk.print_stats = false;
       pk.fault = PssFault::kNone;  // the negative controls break the film's stage only

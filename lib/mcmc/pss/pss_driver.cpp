@@ -216,7 +216,7 @@ int64_t run_pss(const SampleFunction& f, const RenderSettings& st, const PssSett
   const int64_t spp_pass = std::max<int64_t>(1, st.spp / passes);
   const int64_t N = pss.mutations_per_pass > 0 ? pss.mutations_per_pass : spp_pass * P;  // mutations per pass
   const int levels = std::max(1, f.levels);
-  const int64_t per_level = std::max<int64_t>(1, (pss.bootstrap + levels - 1) / levels);
+  const int64_t per_level = std::max<int64_t>(1, (pss.bootstrap_for(N, levels) + levels - 1) / levels);
   const int64_t boot_n = per_level * levels;
   const int64_t segment = std::max<int64_t>(1, pss.segment);
   const bool resample = pss.resample_levels || levels == 1;

@@ -31,6 +31,7 @@
 // splat buffers are merged in (segment, chain) order: bit-identical for any thread count.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -62,7 +63,8 @@ using TargetFunction = std::function<double(const std::vector<Splat>&)>;
 struct PssSettings {
   double large_step_probability = 0.3;  // Kelemen et al. 2002, Sec. 5.3 (pbrt-v3 default 0.3)
   double sigma = 0.01;                  // small-step standard deviation (pbrt-v3 default)
-  int64_t bootstrap = 100000;           // bootstrap samples per pass, split evenly over levels
+  // Bootstrap samples per pass, split evenly over levels; 0 (default): bootstrap_for(N, levels).
+  int64_t bootstrap = 0;
   int64_t chains = 64;                  // chains per pass (at most one per mutation)
   int64_t segment = 1024;               // mutations per chain between splat merges (memory bound)
   // Levels (MMLT path lengths). false: one chain set per level, its share of the mutations fixed
@@ -73,6 +75,15 @@ struct PssSettings {
   bool print_stats = false;             // acceptance rates and mutations/s to stderr
   // Small-step sigma rescaled by the current target value (rescaled_step.h), Y_ref = b of the pass.
   StepRescaling rescale;
+  // The bootstrap of a pass of N mutations: `bootstrap` when set, else N / 2 (one level; b's
+  // error is common to all pixels, so it only has to stay below a pixel's, which sees ~N / P
+  // mutations) or 2 N (MMLT: per-level targets have a larger relative variance), clamped to
+  // [8192, 100000]: small passes (time-budgeted runs, docs/compare.md) stay small, large ones
+  // do not spend more on b than before.
+  int64_t bootstrap_for(int64_t N, int levels) const {
+    if (bootstrap > 0) return bootstrap;
+    return std::clamp<int64_t>(levels > 1 ? 2 * N : N / 2, 8192, 100000);
+  }
   TargetFunction target;                // empty: luminance of the splat sum
   int64_t mutations_per_pass = 0;       // > 0: replaces spp per pass * pixels (multi-stage guides)
   bool count_visits = false;            // PssStats::visits: per pixel, mutations whose state lies there
