@@ -68,6 +68,29 @@ struct CornellBox {
         ctx{world.get(), sampler.get()} {}
 };
 
+// The path tracer as a PSS sample function on the box (pssmlt-pt's target).
+SampleFunction pt_sample_function(const CornellBox& box, int res) {
+  RenderSettings rs;
+  rs.max_depth = kMaxDepth;
+  return radiance_sample_function(res, res, [c = box.ctx, rs](const Vec2& r, Uniforms& u) { return pt_sample(c, rs, r, u); });
+}
+
+// The mean of pi over 4096 uniform dense states drawn with (seed, key): the b (Y_ref) of the
+// rescaled step and of the brightness classes (any positive constant is a valid choice there).
+// `last` receives the generator afterwards, for callers that go on drawing from it.
+double mean_over_uniform_states(const std::function<double(const DenseState&)>& pi, uint64_t seed, uint64_t key,
+                                Rng* last = nullptr) {
+  Rng rng = Rng::for_sample(seed, key, 0);
+  DenseState x(kStreams * kPerStream);
+  double m = 0.0;
+  for (int i = 0; i < 4096; ++i) {
+    for (double& v : x) v = rng.uniform();
+    m += pi(x) / 4096.0;
+  }
+  if (last) *last = rng;
+  return m;
+}
+
 // ---- pairwise detailed balance ----------------------------------------------------------------
 
 template <class K>
@@ -120,21 +143,9 @@ CheckResult run_pairwise(const CheckContext& ctx, bool mmlt, Mutation m, const s
 // kernel accepted by min(1, pi(y) / pi(x)) (validate/mcmc/broken_variants.h MetropolisRatioOnly).
 CheckResult run_rescaled_pairwise(const CheckContext& ctx, bool pt, bool no_ratio, const std::string& name) {
   const CornellBox box(16);
-  RenderSettings rs;
-  rs.max_depth = kMaxDepth;
-  const SampleFunction f =
-      pt ? radiance_sample_function(16, 16, [ctx = box.ctx, rs](const Vec2& r, Uniforms& u) { return pt_sample(ctx, rs, r, u); })
-         : bdpt_sample_function(box.ctx, 16, 16, kMaxDepth);
-  // Y_ref: mean of I over 4096 uniform states (fixed seed; any positive constant is a valid choice).
-  double y_ref = 0.0;
-  {
-    Rng rng = Rng::for_sample(ctx.seed, hash_string(name + ".y_ref"), 0);
-    DenseState x(kStreams * kPerStream);
-    for (int i = 0; i < 4096; ++i) {
-      for (double& v : x) v = rng.uniform();
-      y_ref += evaluate_dense(f, 0, x).value / 4096.0;
-    }
-  }
+  const SampleFunction f = pt ? pt_sample_function(box, 16) : bdpt_sample_function(box.ctx, 16, 16, kMaxDepth);
+  const double y_ref = mean_over_uniform_states([&f](const DenseState& x) { return evaluate_dense(f, 0, x).value; },
+                                                ctx.seed, hash_string(name + ".y_ref"));
   StepRescaling r;
   r.enabled = true;
   const RescaledSmallStep step(f, 0, PssSettings{}.sigma, y_ref, r);
@@ -217,10 +228,9 @@ CheckResult run_pss_flux(const CheckContext& ctx, FluxVariant v, const std::stri
   RenderSettings rs;
   rs.max_depth = kMaxDepth;
   const bool pt = v == FluxVariant::kPssmltPt || v == FluxVariant::kRescaled || v == FluxVariant::kRescaledNoRatio;
-  const SampleFunction f =
-      v == FluxVariant::kMmlt ? mmlt_sample_function(box.ctx, kRes, kRes, kMaxDepth)
-      : pt ? radiance_sample_function(kRes, kRes, [c = box.ctx, rs](const Vec2& r, Uniforms& u) { return pt_sample(c, rs, r, u); })
-           : bdpt_sample_function(box.ctx, kRes, kRes, kMaxDepth);
+  const SampleFunction f = v == FluxVariant::kMmlt ? mmlt_sample_function(box.ctx, kRes, kRes, kMaxDepth)
+                           : pt                     ? pt_sample_function(box, kRes)
+                                                    : bdpt_sample_function(box.ctx, kRes, kRes, kMaxDepth);
   const int level = v == FluxVariant::kMmlt ? 2 : 0;
   std::function<double(const DenseState&)> pi = [&f, level](const DenseState& x) {
     return evaluate_dense(f, level, x).value;
@@ -243,15 +253,7 @@ CheckResult run_pss_flux(const CheckContext& ctx, FluxVariant v, const std::stri
     };
   }
   // b: mean of pi over uniform states (fixed seed).
-  double b = 0.0;
-  {
-    Rng rng = Rng::for_sample(ctx.seed, hash_string(name + ".b"), 0);
-    DenseState x(kStreams * kPerStream);
-    for (int i = 0; i < 4096; ++i) {
-      for (double& u : x) u = rng.uniform();
-      b += pi(x) / 4096.0;
-    }
-  }
+  const double b = mean_over_uniform_states(pi, ctx.seed, hash_string(name + ".b"));
   const PssSettings defaults;
   // The control needs more chains: its net flux is a few per cent of the crossings (measured: at
   // 2048 chains Šidák p = 0.005, at 8192 p = 1.5e-20).
@@ -365,17 +367,11 @@ CheckResult run_lazy_chi2(const CheckContext& ctx, bool misstated, const std::st
 CheckResult run_step_chi2(const CheckContext& ctx, bool large, bool misstated, const std::string& name) {
   constexpr int kRes = 16;
   const CornellBox box(kRes);
-  RenderSettings rs;
-  rs.max_depth = kMaxDepth;
-  const SampleFunction f =
-      radiance_sample_function(kRes, kRes, [c = box.ctx, rs](const Vec2& r, Uniforms& u) { return pt_sample(c, rs, r, u); });
-  double b = 0.0;
-  Rng rng = Rng::for_sample(ctx.seed, hash_string(name + ".states"), 0);
+  const SampleFunction f = pt_sample_function(box, kRes);
+  Rng rng = Rng::for_sample(0, 0, 0);
+  const double b = mean_over_uniform_states([&f](const DenseState& x) { return evaluate_dense(f, 0, x).value; },
+                                            ctx.seed, hash_string(name + ".states"), &rng);
   DenseState x(kStreams * kPerStream);
-  for (int i = 0; i < 4096; ++i) {
-    for (double& v : x) v = rng.uniform();
-    b += evaluate_dense(f, 0, x).value / 4096.0;
-  }
   StepRescaling resc;
   resc.enabled = true;
   const RescaledSmallStep step(f, 0, PssSettings{}.sigma, b, resc);
