@@ -21,6 +21,10 @@ CameraRay PinholeCamera::generate_ray(const Vec2& raster, const Vec2& /*lens_u*/
   return out;
 }
 
+CameraPrimaryRay PinholeCamera::generate_primary_ray(const Vec2& raster, const Vec2& /*lens_u*/) const {
+  return {Ray{proj_.eye(), direction_through(raster)}, 1.0};
+}
+
 std::optional<CameraRasterHit> PinholeCamera::raster_from_ray(const Ray& ray) const {
   const Vec3 d = proj_.to_camera_dir(ray.d);
   if (!(d.z > 0.0) || !is_finite(d)) return std::nullopt;

@@ -14,6 +14,7 @@ class PinholeCamera final : public Camera {
   double lens_area() const override { return 1.0; }
   bool lens_is_delta() const override { return true; }
   CameraRay generate_ray(const Vec2& raster, const Vec2& lens_u) const override;
+  CameraPrimaryRay generate_primary_ray(const Vec2& raster, const Vec2& lens_u) const override;
   std::optional<CameraRasterHit> raster_from_ray(const Ray& ray) const override;
   double importance(const Ray& ray) const override;
   CameraPdf pdf_we(const Ray& ray) const override;

@@ -47,6 +47,11 @@ CameraRay ThinLensCamera::generate_ray(const Vec2& raster, const Vec2& lens_u) c
   return out;
 }
 
+CameraPrimaryRay ThinLensCamera::generate_primary_ray(const Vec2& raster, const Vec2& lens_u) const {
+  const Vec3 lens = lens_point_camera(lens_u);
+  return {Ray{proj_.to_world_point(lens), glm::normalize(proj_.to_world_dir(focus_point_camera(raster) - lens))}, 1.0};
+}
+
 std::optional<CameraRasterHit> ThinLensCamera::raster_from_ray(const Ray& ray) const {
   const Vec3 o = proj_.to_camera_point(ray.o);
   const Vec3 d = proj_.to_camera_dir(ray.d);

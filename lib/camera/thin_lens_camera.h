@@ -28,6 +28,7 @@ class ThinLensCamera final : public Camera {
   double pdf_lens_area(const Vec2& lens_xy) const;
 
   CameraRay generate_ray(const Vec2& raster, const Vec2& lens_u) const override;
+  CameraPrimaryRay generate_primary_ray(const Vec2& raster, const Vec2& lens_u) const override;
   std::optional<CameraRasterHit> raster_from_ray(const Ray& ray) const override;
   double importance(const Ray& ray) const override;
   CameraPdf pdf_we(const Ray& ray) const override;

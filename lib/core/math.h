@@ -4,6 +4,7 @@
 #pragma once
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -49,6 +50,20 @@ inline double sum_of_products(double a, double b, double c, double d) {
   const double err = std::fma(c, d, -cd);
   const double sop = std::fma(a, b, cd);
   return sop + err;
+}
+
+// |v| componentwise and the largest component, without branches: glm::abs compiles to a compare
+// and a jump per component, and std::max({...}) to a loop of jumps; for coordinates of random sign
+// these were mispredicted about half the time in the path tracer's inner loop (std::abs is a mask,
+// nested std::max a maxsd). Same values (the sign of a zero aside).
+inline Vec3 abs_components(const Vec3& v) { return {std::abs(v.x), std::abs(v.y), std::abs(v.z)}; }
+inline double max_component(const Vec3& v) { return std::max(std::max(v.x, v.y), v.z); }
+
+// c ? a : b by bit masks: GCC turns a ternary on doubles into a jump, which for a random c (the
+// wedge of the concentric disk map) is mispredicted half the time.
+inline double select_bits(bool c, double a, double b) {
+  const uint64_t m = 0 - static_cast<uint64_t>(c);
+  return std::bit_cast<double>((std::bit_cast<uint64_t>(a) & m) | (std::bit_cast<uint64_t>(b) & ~m));
 }
 
 inline bool is_finite(double x) { return std::isfinite(x); }

@@ -8,7 +8,7 @@ namespace tb {
 using Rgb = glm::dvec3;
 
 inline double luminance(const Rgb& c) { return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b; }
-inline double max_component(const Rgb& c) { return std::max({c.r, c.g, c.b}); }
+// max_component(const Rgb&): lib/core/math.h (Rgb is Vec3).
 inline bool is_black(const Rgb& c) { return c.r == 0 && c.g == 0 && c.b == 0; }
 
 }  // namespace tb

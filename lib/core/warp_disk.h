@@ -6,23 +6,24 @@
 #include <cmath>
 
 #include "lib/core/math.h"
+#include "lib/core/sincos_quarter.h"
 
 namespace tb {
 
 // [0,1)^2 -> unit disk. Squares [-1,1]^2 concentric to the origin go to concentric circles,
 // which keeps strata compact (Shirley & Chiu 1997, Sec. 3).
+// The wedge angles phi = pi/4 * b/a and pi/2 - pi/4 * a/b lie within pi/4 of an axis, so sin and
+// cos come from sincos_quarter (no libm call): cos(pi/2 - x) = sin x, sin(pi/2 - x) = cos x.
 inline Vec2 sample_uniform_disk_concentric(const Vec2& u) {
   const double a = 2.0 * u.x - 1.0, b = 2.0 * u.y - 1.0;
   if (a == 0.0 && b == 0.0) return {0.0, 0.0};
-  double r, phi;
-  if (std::abs(a) > std::abs(b)) {
-    r = a;
-    phi = kPiOver4 * (b / a);
-  } else {
-    r = b;
-    phi = kPiOver2 - kPiOver4 * (a / b);
-  }
-  return {r * std::cos(phi), r * std::sin(phi)};
+  // Selects rather than branches: the wedge is a coin flip for random u, so a branch would be
+  // mispredicted half the time.
+  const bool wedge_x = std::abs(a) > std::abs(b);
+  const double r = select_bits(wedge_x, a, b);
+  double s, c;
+  sincos_quarter(kPiOver4 * (select_bits(wedge_x, b, a) / r), &s, &c);  // phi = pi/4 b/a or pi/2 - pi/4 a/b
+  return {r * select_bits(wedge_x, c, s), r * select_bits(wedge_x, s, c)};
 }
 
 // Area density on the unit disk (zero outside).

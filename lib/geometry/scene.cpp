@@ -170,17 +170,26 @@ void Scene::commit() {
   committed_ = true;
 }
 
+namespace {
+
+// rtcIntersect1 with the double ray in the extended context; rh->hit.geomID names the nearest shape.
+void trace(void* scene, const Ray& ray, double tmax, QueryContext* ctx, RTCRayHit* rh) {
+  rtcInitIntersectContext(&ctx->base);
+  ctx->ray = &ray;
+  fill_ray(ray, tmax, &rh->ray);
+  rh->hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh->hit.primID = RTC_INVALID_GEOMETRY_ID;
+  rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(static_cast<RTCScene>(scene), &ctx->base, rh);
+}
+
+}  // namespace
+
 std::optional<Hit> Scene::intersect(const Ray& ray, double tmax) const {
   if (!committed_) throw std::logic_error("Scene::intersect before commit");
   QueryContext ctx;
-  rtcInitIntersectContext(&ctx.base);
-  ctx.ray = &ray;
   RTCRayHit rh;
-  fill_ray(ray, tmax, &rh.ray);
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(static_cast<RTCScene>(scene_), &ctx.base, &rh);
+  trace(scene_, ray, tmax, &ctx, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
   const Entry& e = *entries_[rh.hit.geomID];
   if (const auto* m = std::get_if<TriangleMesh>(&e.shape)) {
@@ -194,6 +203,25 @@ std::optional<Hit> Scene::intersect(const Ray& ray, double tmax) const {
   if (!ctx.analytic_hit || ctx.analytic_hit->shape_id != e.id) throw std::logic_error("Scene: lost analytic hit");
   if (!(ctx.analytic_hit->t < std::min(tmax, ray.t_max))) return std::nullopt;  // float tfar rounded up past tmax
   return ctx.analytic_hit;
+}
+
+std::optional<SurfacePoint> Scene::intersect_point(const Ray& ray, double tmax) const {
+  if (!committed_) throw std::logic_error("Scene::intersect before commit");
+  QueryContext ctx;
+  RTCRayHit rh;
+  trace(scene_, ray, tmax, &ctx, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+  const Entry& e = *entries_[rh.hit.geomID];
+  if (const auto* m = std::get_if<TriangleMesh>(&e.shape)) {
+    // Built by value (no zero-filled record overwritten field by field).
+    SurfacePoint p = m->refine_point(rh.hit.primID, ray, rh.ray.tfar, Vec2(rh.hit.u, rh.hit.v));
+    p.shape_id = e.id;
+    return p;
+  }
+  // As in intersect(); analytic shapes compute their full Hit in the Embree callback anyway.
+  if (!ctx.analytic_hit || ctx.analytic_hit->shape_id != e.id) throw std::logic_error("Scene: lost analytic hit");
+  if (!(ctx.analytic_hit->t < std::min(tmax, ray.t_max))) return std::nullopt;  // float tfar rounded up past tmax
+  return static_cast<const SurfacePoint&>(*ctx.analytic_hit);
 }
 
 bool Scene::occluded(const Ray& ray, double tmax) const {
@@ -237,7 +265,21 @@ double Scene::sample_area_into(uint32_t shape_id, const Vec2& u, Hit* h) const {
   return pdf;
 }
 
-double Scene::pdf_area(const Hit& h) const {
+SurfacePoint Scene::sample_point(uint32_t shape_id, const Vec2& u, double* pdf_area) const {
+  const Entry& e = *entries_.at(shape_id);
+  if (const auto* m = std::get_if<TriangleMesh>(&e.shape)) {
+    SurfacePoint p = m->sample_point(u, pdf_area);
+    p.shape_id = shape_id;
+    return p;
+  }
+  const AreaSample s = std::get<ShapeInstance>(e.shape).sample_area(u);
+  *pdf_area = s.pdf_area;
+  SurfacePoint p = s.hit;
+  p.shape_id = shape_id;
+  return p;
+}
+
+double Scene::pdf_area(const SurfacePoint& h) const {
   return is_mesh(h.shape_id) ? mesh(h.shape_id).pdf_area() : analytic(h.shape_id).pdf_area(h.uv);
 }
 

@@ -35,6 +35,9 @@ class Scene {
   // Nearest hit with ray.t_min < t < min(ray.t_max, tmax) (rtcIntersect1). Thread-safe after
   // commit().
   std::optional<Hit> intersect(const Ray& ray, double tmax = kInfinity) const;
+  // The same query without differential geometry (integrators): the SurfacePoint part of the Hit
+  // intersect() would return.
+  std::optional<SurfacePoint> intersect_point(const Ray& ray, double tmax = kInfinity) const;
   // Any hit with ray.t_min < t < min(ray.t_max, tmax) (rtcOccluded1). Shadow rays from
   // spawn_ray_to carry t_max = 1 - kShadowEpsilon already.
   bool occluded(const Ray& ray, double tmax = kInfinity) const;
@@ -51,7 +54,9 @@ class Scene {
   AreaSample sample_area(uint32_t shape_id, const Vec2& u) const;
   // The same point written into *h (no copies of the Hit for meshes); returns pdf_area.
   double sample_area_into(uint32_t shape_id, const Vec2& u, Hit* h) const;
-  double pdf_area(const Hit& h) const;
+  // The same point without differential geometry (next-event estimation); *pdf_area as above.
+  SurfacePoint sample_point(uint32_t shape_id, const Vec2& u, double* pdf_area) const;
+  double pdf_area(const SurfacePoint& h) const;
 
   // The committed RTCScene (as void*, so that this header needs no Embree include), for
   // benchmarks that measure raw Embree throughput next to Scene queries. Raw rtcIntersect1 /

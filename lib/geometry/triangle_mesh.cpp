@@ -44,51 +44,60 @@ double TriangleMesh::triangle_area(uint32_t prim) const {
   return 0.5 * glm::length(glm::cross(pos_[t[1]] - pos_[t[0]], pos_[t[2]] - pos_[t[0]]));
 }
 
-void TriangleMesh::surface_at(uint32_t prim, const Vec2& uv, Hit* out) const {
+SurfacePoint TriangleMesh::point_at(uint32_t prim, const Vec2& uv, double t_hit) const {
   const glm::uvec3 t = tris_[prim];
   const Vec3 &p0 = pos_[t[0]], &p1 = pos_[t[1]], &p2 = pos_[t[2]];
   const double b1 = uv.x, b2 = uv.y, b0 = 1 - b1 - b2;
-  Hit& h = *out;
-  h = Hit{};
-  h.prim_id = prim;
-  h.uv = uv;
-  h.p = b0 * p0 + b1 * p1 + b2 * p2;
-  h.dpdu = p1 - p0;
-  h.dpdv = p2 - p0;
-  h.ng = frames_[prim].ng;
+  Vec3 ng = frames_[prim].ng, n = ng;
   if (!nrm_.empty()) {
-    const Vec3 &n0 = nrm_[t[0]], &n1 = nrm_[t[1]], &n2 = nrm_[t[2]];
-    const Vec3 a = b0 * n0 + b1 * n1 + b2 * n2;
+    const Vec3 a = b0 * nrm_[t[0]] + b1 * nrm_[t[1]] + b2 * nrm_[t[2]];
     const double len = glm::length(a);
-    if (len > 0) {
-      h.n = a / len;
-      // d(a/|a|) = (I - n n^T) da / |a| with da/du = n1 - n0, da/dv = n2 - n0.
-      const Vec3 dau = n1 - n0, dav = n2 - n0;
-      h.dndu = (dau - glm::dot(h.n, dau) * h.n) / len;
-      h.dndv = (dav - glm::dot(h.n, dav) * h.n) / len;
-    } else {
-      h.n = h.ng;
-    }
-    if (glm::dot(h.ng, h.n) < 0) h.ng = -h.ng;  // geometric normal on the side of the shading normal
-  } else {
-    h.n = h.ng;
+    if (len > 0) n = a / len;
+    if (glm::dot(ng, n) < 0) ng = -ng;  // geometric normal on the side of the shading normal
   }
   if (flip_) {
-    h.n = -h.n;
-    h.ng = -h.ng;
-    h.dndu = -h.dndu;
-    h.dndv = -h.dndv;
+    n = -n;
+    ng = -ng;
   }
   // Embree intersects in float: the bound covers its float arithmetic on coordinates of this
   // magnitude (pbrt-v3 Sec. 3.9.6 uses gamma_7 for its own float test; we allow more for
   // Embree's different formulation and for the float rounding of the ray origin).
   // Isotropic: Embree's plane and edge tests mix all coordinates, so a triangle lying in z = 0
   // still needs an offset in z.
-  const Vec3 mag = glm::abs(b0 * p0) + glm::abs(b1 * p1) + glm::abs(b2 * p2);
-  h.p_error = Vec3(gamma_f(32) * std::max({mag.x, mag.y, mag.z}));
+  const Vec3 mag = abs_components(b0 * p0) + abs_components(b1 * p1) + abs_components(b2 * p2);
+  const Vec3 p_error(gamma_f(32) * max_component(mag));
+  return SurfacePoint{b0 * p0 + b1 * p1 + b2 * p2, ng, n, uv, 0u, prim, t_hit, p_error};
 }
 
-void TriangleMesh::refine_hit(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float, Hit* h) const {
+void TriangleMesh::surface_at(uint32_t prim, const Vec2& uv, Hit* out) const {
+  static_cast<SurfacePoint&>(*out) = point_at(prim, uv, 0.0);
+  const glm::uvec3 t = tris_[prim];
+  const Vec3 &p0 = pos_[t[0]], &p1 = pos_[t[1]], &p2 = pos_[t[2]];
+  Hit& h = *out;
+  h.dpdu = p1 - p0;
+  h.dpdv = p2 - p0;
+  h.dndu = Vec3(0.0);
+  h.dndv = Vec3(0.0);
+  if (!nrm_.empty()) {
+    const double b1 = uv.x, b2 = uv.y, b0 = 1 - b1 - b2;
+    const Vec3 &n0 = nrm_[t[0]], &n1 = nrm_[t[1]], &n2 = nrm_[t[2]];
+    const Vec3 a = b0 * n0 + b1 * n1 + b2 * n2;  // as in point_at, so n below is h.n up to flip_
+    const double len = glm::length(a);
+    if (len > 0) {
+      const Vec3 n = a / len;
+      // d(a/|a|) = (I - n n^T) da / |a| with da/du = n1 - n0, da/dv = n2 - n0.
+      const Vec3 dau = n1 - n0, dav = n2 - n0;
+      h.dndu = (dau - glm::dot(n, dau) * n) / len;
+      h.dndv = (dav - glm::dot(n, dav) * n) / len;
+    }
+  }
+  if (flip_) {
+    h.dndu = -h.dndu;
+    h.dndv = -h.dndv;
+  }
+}
+
+Vec2 TriangleMesh::refine_uv(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float, double* t_out) const {
   const glm::uvec3 tri = tris_[prim];
   const Vec3 &p0 = pos_[tri[0]], &p1 = pos_[tri[1]], &p2 = pos_[tri[2]];
   const Vec3 e1 = p1 - p0, e2 = p2 - p0;
@@ -116,8 +125,21 @@ void TriangleMesh::refine_hit(uint32_t prim, const Ray& ray, double t_float, con
       uv = {b1, b2};
     }
   }
+  *t_out = t;
+  return uv;
+}
+
+void TriangleMesh::refine_hit(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float, Hit* h) const {
+  double t = 0.0;
+  const Vec2 uv = refine_uv(prim, ray, t_float, uv_float, &t);
   surface_at(prim, uv, h);
   h->t = t;
+}
+
+SurfacePoint TriangleMesh::refine_point(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float) const {
+  double t = 0.0;
+  const Vec2 uv = refine_uv(prim, ray, t_float, uv_float, &t);
+  return point_at(prim, uv, t);
 }
 
 Vec2 TriangleMesh::texcoord(uint32_t prim, const Vec2& uv) const {
@@ -132,16 +154,47 @@ AreaSample TriangleMesh::sample_area(const Vec2& u) const {
   return a;
 }
 
-double TriangleMesh::sample_area(const Vec2& u, Hit* h) const {
+namespace {
+
+// std::upper_bound(cdf.begin(), cdf.end(), x) - cdf.begin() for a sorted cdf, with a loop whose
+// trip count depends only on the size and a conditional move inside: for random x the branches of
+// std::upper_bound are mispredicted about half the time.
+size_t upper_bound_branchless(const std::vector<double>& cdf, double x) {
+  size_t base = 0, len = cdf.size();
+  while (len > 1) {
+    const size_t half = len / 2;
+    base = cdf[base + half - 1] <= x ? base + half : base;  // first half entirely <= x
+    len -= half;
+  }
+  return base + (cdf[base] <= x ? 1 : 0);
+}
+
+}  // namespace
+
+uint32_t TriangleMesh::sample_uv(const Vec2& u, Vec2* uv) const {
   const double target = u.x * total_area_;
-  const auto it = std::upper_bound(cdf_.begin(), cdf_.end(), target);
-  const uint32_t prim = static_cast<uint32_t>(std::min<ptrdiff_t>(it - cdf_.begin(), static_cast<ptrdiff_t>(cdf_.size()) - 1));
-  const double lo = prim == 0 ? 0.0 : cdf_[prim - 1];
+  const size_t i = upper_bound_branchless(cdf_, target);
+  const uint32_t prim = static_cast<uint32_t>(std::min(i, cdf_.size() - 1));
+  const double lo = select_bits(prim == 0, 0.0, cdf_[prim == 0 ? 0 : prim - 1]);  // no jump on prim
   const double width = cdf_[prim] - lo;
   const double s = width > 0 ? std::clamp((target - lo) / width, 0.0, 1.0) : 0.0;  // re-used uniform
   const double su = std::sqrt(s);
-  surface_at(prim, {su * (1 - u.y), su * u.y}, h);
+  *uv = {su * (1 - u.y), su * u.y};
+  return prim;
+}
+
+double TriangleMesh::sample_area(const Vec2& u, Hit* h) const {
+  Vec2 uv;
+  const uint32_t prim = sample_uv(u, &uv);
+  surface_at(prim, uv, h);
   return 1.0 / total_area_;
+}
+
+SurfacePoint TriangleMesh::sample_point(const Vec2& u, double* pdf_area) const {
+  Vec2 uv;
+  const uint32_t prim = sample_uv(u, &uv);
+  *pdf_area = 1.0 / total_area_;
+  return point_at(prim, uv, 0.0);
 }
 
 }  // namespace tb

@@ -40,6 +40,9 @@ class TriangleMesh {
   }
   // The same, written into *h (every field of a Hit is set).
   void surface_at(uint32_t prim, const Vec2& uv, Hit* h) const;
+  // Only the SurfacePoint fields (no derivatives), t = 0, shape_id = 0. Returned by value and
+  // built by aggregate initialisation, so that no zero-filled record is overwritten.
+  SurfacePoint point_at(uint32_t prim, const Vec2& uv) const { return point_at(prim, uv, 0.0); }
   // Re-intersects the double ray with triangle `prim` (plane intersection, barycentrics clamped
   // to the triangle): refines a float hit reported by Embree. Falls back to (t, uv) given.
   Hit refine_hit(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float) const {
@@ -48,6 +51,7 @@ class TriangleMesh {
     return h;
   }
   void refine_hit(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float, Hit* h) const;
+  SurfacePoint refine_point(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float) const;
   Vec2 texcoord(uint32_t prim, const Vec2& uv) const;
 
   double area() const { return total_area_; }
@@ -57,6 +61,7 @@ class TriangleMesh {
   AreaSample sample_area(const Vec2& u) const;
   // The same point written into *h; returns its density per unit area.
   double sample_area(const Vec2& u, Hit* h) const;
+  SurfacePoint sample_point(const Vec2& u, double* pdf_area) const;
   double pdf_area() const { return 1.0 / total_area_; }
 
  private:
@@ -72,6 +77,11 @@ class TriangleMesh {
     double d00 = 0, d01 = 0, d11 = 0, denom = 0;  // Gram matrix of (e1, e2) and its determinant
   };
   std::vector<TriangleFrame> frames_;
+  SurfacePoint point_at(uint32_t prim, const Vec2& uv, double t) const;
+  // Refined (t, barycentrics) of a float hit; uv_float / t_float when the ray is parallel.
+  Vec2 refine_uv(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float, double* t) const;
+  // Triangle and barycentrics of an area sample.
+  uint32_t sample_uv(const Vec2& u, Vec2* uv) const;
   std::vector<double> cdf_;  // cumulative triangle areas, cdf_.back() == total_area_
   double total_area_ = 0;
   bool flip_;

@@ -18,17 +18,14 @@ namespace tb {
 namespace {
 
 // The power heuristic with beta = 2 (Veach Eq. 9.13) for the two techniques at a vertex, both
-// densities in solid angle at the vertex. A constant object so that pow(x, 2) folds to x * x.
-constexpr PowerHeuristic kMis{};
-
-double mis2(double p_this, double p_other) {
-  const std::array<double, 2> q{p_this, p_other};
-  return kMis.weight(q, 0);
-}
+// densities in solid angle at the vertex: the two-technique form of PowerHeuristic (two divisions
+// instead of four; equal up to rounding).
+double mis2(double p_this, double p_other) { return power_heuristic_2(p_this, p_other); }
 
 struct BounceUniforms {
   std::array<double, kDimsPerBounce> u;
-  explicit BounceUniforms(Uniforms& src) {
+  template <class U>
+  explicit BounceUniforms(U& src) {
     for (double& v : u) v = src.next();
   }
   double operator[](BounceDim d) const { return u[static_cast<size_t>(d)]; }
@@ -40,8 +37,11 @@ class PathTracer {
       : world_(world), st_(st), lights_(lights) {}
 
   // Radiance arriving along the camera ray (Veach Eq. 3.7 estimated by the path integral,
-  // pbrt-v3 PathIntegrator::Li).
-  Rgb li(Ray ray, Uniforms& rng, RayCounts& counts) const {
+  // pbrt-v3 PathIntegrator::Li). U is Uniforms or a final class derived from it (RngUniforms in
+  // the render loop), so that next() is a direct, inlined call there. Vertices are lean
+  // SurfacePoints: the path tracer never needs the derivatives of a Hit.
+  template <class U>
+  Rgb li(Ray ray, U& rng, RayCounts& counts) const {
     const Scene& scene = world_.geometry();
     Rgb L(0.0), beta(1.0);
     bool count_emission_fully = true;  // camera ray, or the last bounce was a delta lobe
@@ -49,7 +49,7 @@ class PathTracer {
     Vec3 prev_p(0.0);                  // the vertex the ray left
     for (int depth = 0;; ++depth) {
       ++counts.extension;
-      const std::optional<Hit> hit = scene.intersect(ray);
+      const std::optional<SurfacePoint> hit = scene.intersect_point(ray);
       if (!hit) {
         for (const Light* env : world_.infinite_lights()) {
           const Rgb le = env->le(Vec3(0.0), ray.d);
@@ -70,7 +70,7 @@ class PathTracer {
       const BounceUniforms u(rng);
 
       // Next-event estimation (Veach Eq. 9.12 with the light technique's weight).
-      if (surf.bsdf->flags() & (bsdf_flags::kDiffuse | bsdf_flags::kGlossy)) L += beta * direct(scatter, wo, u, counts);
+      if (scatter.flags() & (bsdf_flags::kDiffuse | bsdf_flags::kGlossy)) L += beta * direct(scatter, wo, u, counts);
 
       // BSDF sampling: extends the path and, when it hits an emitter, is the second technique.
       const auto bs = scatter.sample(wo, u[BounceDim::kBsdfLobe], {u[BounceDim::kBsdfU], u[BounceDim::kBsdfV]},
@@ -95,7 +95,7 @@ class PathTracer {
   // MIS weight of emission found by BSDF sampling (or by the camera ray): the light technique
   // would have sampled the same direction with density pmf * pdf_li (solid angle at prev_p).
   double emission_weight(bool fully, double pdf_bsdf, const Light* light, const Vec3& prev_p, const Vec3& wi,
-                         const Hit* on_light) const {
+                         const SurfacePoint* on_light) const {
     if (fully) return 1.0;
     if (st_.fault == IntegratorFault::kMisMissingDensity) return 1.0;  // light density left out
     const double pdf_light = lights_.pmf(light) * light->pdf_li(prev_p, wi, on_light);
@@ -106,8 +106,8 @@ class PathTracer {
   Rgb direct(const SurfaceScatter& scatter, const Vec3& wo, const BounceUniforms& u, RayCounts& counts) const {
     const auto choice = lights_.sample(u[BounceDim::kLightSelect]);
     if (!choice) return Rgb(0.0);
-    const Hit& hit = scatter.hit();
-    const auto ls = choice->light->sample_li(hit.p, {u[BounceDim::kLightU], u[BounceDim::kLightV]});
+    const SurfacePoint& hit = scatter.hit();
+    const auto ls = choice->light->sample_li_point(hit.p, {u[BounceDim::kLightU], u[BounceDim::kLightV]});
     if (!ls || !(ls->pdf > 0) || is_black(ls->li)) return Rgb(0.0);
     const Rgb f = scatter.f(wo, ls->wi, TransportMode::kRadiance);
     if (is_black(f)) return Rgb(0.0);
@@ -133,7 +133,7 @@ class PathTracer {
 Rgb pt_sample(const PathContext& ctx, const RenderSettings& st, const Vec2& raster, Uniforms& u) {
   const PathTracer pt(*ctx.world, st, *ctx.lights);
   const Vec2 lens_u = u.next2();  // CameraDim::kLensU, kLensV
-  const CameraRay cr = ctx.world->camera().generate_ray(raster, lens_u);
+  const CameraPrimaryRay cr = ctx.world->camera().generate_primary_ray(raster, lens_u);
   if (!(cr.weight > 0)) return Rgb(0.0);
   RayCounts rc;
   return cr.weight * pt.li(cr.ray, u, rc);
@@ -156,7 +156,7 @@ int64_t render_pt(const World& world, const RenderSettings& st, Film& film, RayC
         const Vec2 film_u = rng.next2();  // CameraDim::kFilmX, kFilmY
         const Vec2 lens_u = rng.next2();  // CameraDim::kLensU, kLensV
         const Vec2 raster(x + film_u.x, y + film_u.y);
-        const CameraRay cr = cam.generate_ray(raster, lens_u);
+        const CameraPrimaryRay cr = cam.generate_primary_ray(raster, lens_u);
         const Rgb v = cr.weight > 0 ? cr.weight * pt.li(cr.ray, rng, rc) : Rgb(0.0);
         tile.add_sample(raster, v, index);
       });

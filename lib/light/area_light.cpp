@@ -20,33 +20,42 @@ Rgb AreaLight::le(const Vec3& n, const Vec3& w) const {
   return Rgb(0.0);
 }
 
-double AreaLight::pdf_area(const Hit& h) const { return scene_->pdf_area(h); }
+double AreaLight::pdf_area(const SurfacePoint& h) const { return scene_->pdf_area(h); }
+
+std::optional<LightLiPoint> AreaLight::li_from(const Vec3& ref, const SurfacePoint& at, double pdf_area) const {
+  const Vec3 d = at.p - ref;
+  const double dist2 = glm::dot(d, d);
+  const double dist = std::sqrt(dist2);
+  const Vec3 wi = d * (1.0 / dist);  // one division instead of three (within an ulp of d / dist)
+  const double cos_light = std::abs(glm::dot(at.n, wi));
+  if (!(pdf_area > 0) || !(dist2 > 0) || !(cos_light > 0)) return std::nullopt;
+  // A prvalue built in place from every field: no zero-filled record, no copy.
+  return std::optional<LightLiPoint>(std::in_place, wi, le(at.n, -wi),
+                                     pdf_area * dist2 / cos_light /* area -> solid angle at ref */, at.p, at.n, dist,
+                                     pdf_area);
+}
 
 std::optional<LightLiSample> AreaLight::sample_li(const Vec3& ref, const Vec2& u) const {
   // Built in place and returned by name on every path (named return value optimisation): the
   // sample carries a full Hit (~220 bytes), whose copies showed in profiles.
   std::optional<LightLiSample> out(std::in_place);
   LightLiSample& ls = *out;
-  ls.pdf_area = scene_->sample_area_into(shape_id_, u, &ls.hit);
-  const Vec3 d = ls.hit.p - ref;
-  const double dist2 = glm::dot(d, d);
-  const double dist = std::sqrt(dist2);
-  const Vec3 wi = d / dist;
-  const double cos_light = std::abs(glm::dot(ls.hit.n, wi));
-  if (!(ls.pdf_area > 0) || !(dist2 > 0) || !(cos_light > 0)) {
+  const double pdf_area = scene_->sample_area_into(shape_id_, u, &ls.hit);
+  if (const auto p = li_from(ref, ls.hit, pdf_area))
+    static_cast<LightLiPoint&>(ls) = *p;
+  else
     out.reset();
-    return out;
-  }
-  ls.wi = wi;
-  ls.li = le(ls.hit.n, -wi);
-  ls.pdf = ls.pdf_area * dist2 / cos_light;  // area -> solid angle at ref
-  ls.p_light = ls.hit.p;
-  ls.n_light = ls.hit.n;
-  ls.distance = dist;
   return out;
 }
 
-double AreaLight::pdf_li(const Vec3& ref, const Vec3& wi, const Hit* on_light) const {
+std::optional<LightLiPoint> AreaLight::sample_li_point(const Vec3& ref, const Vec2& u) const {
+  // The point only: no derivatives are computed (Scene::sample_point).
+  double pdf_area = 0.0;
+  const SurfacePoint at = scene_->sample_point(shape_id_, u, &pdf_area);
+  return li_from(ref, at, pdf_area);
+}
+
+double AreaLight::pdf_li(const Vec3& ref, const Vec3& wi, const SurfacePoint* on_light) const {
   if (!on_light || on_light->shape_id != shape_id_) return 0.0;
   const Vec3 d = on_light->p - ref;
   const double dist2 = glm::dot(d, d);

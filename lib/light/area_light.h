@@ -21,19 +21,22 @@ class AreaLight final : public Light {
   const Rgb& radiance() const { return radiance_; }
 
   std::optional<LightLiSample> sample_li(const Vec3& ref, const Vec2& u) const override;
-  double pdf_li(const Vec3& ref, const Vec3& wi, const Hit* on_light) const override;
+  std::optional<LightLiPoint> sample_li_point(const Vec3& ref, const Vec2& u) const override;
+  double pdf_li(const Vec3& ref, const Vec3& wi, const SurfacePoint* on_light) const override;
   std::optional<LightLeSample> sample_le(const Vec2& u_pos, const Vec2& u_dir) const override;
   void pdf_le(const Hit& at, const Vec3& w, double* pdf_pos, double* pdf_dir) const override;
   Rgb le(const Vec3& n, const Vec3& w) const override;
   Rgb power() const override;
 
   // Density of sampled points per unit area at a hit on this light.
-  double pdf_area(const Hit& h) const;
+  double pdf_area(const SurfacePoint& h) const;
   // World-space area of the emitter (exact for shapes sampled uniformly by area; otherwise the
   // importance-sampling estimate E[1/pdf] over 4096 stratified points).
   double area() const { return area_; }
 
  private:
+  // The sample at the emitter point `at` (area density pdf_area); empty when it is unusable.
+  std::optional<LightLiPoint> li_from(const Vec3& ref, const SurfacePoint& at, double pdf_area) const;
   const Scene* scene_;
   uint32_t shape_id_;
   Rgb radiance_;

@@ -58,7 +58,7 @@ std::optional<LightLiSample> ConstantEnvironmentLight::sample_li(const Vec3& ref
   return s;
 }
 
-double ConstantEnvironmentLight::pdf_li(const Vec3&, const Vec3&, const Hit* on_light) const {
+double ConstantEnvironmentLight::pdf_li(const Vec3&, const Vec3&, const SurfacePoint* on_light) const {
   return on_light ? 0.0 : pdf_uniform_sphere();
 }
 

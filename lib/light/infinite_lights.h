@@ -16,7 +16,7 @@ class DirectionalLight final : public Light {
   void set_scene_sphere(const SceneSphere& s) override { sphere_ = s; }
 
   std::optional<LightLiSample> sample_li(const Vec3& ref, const Vec2& u) const override;
-  double pdf_li(const Vec3&, const Vec3&, const Hit*) const override { return 0.0; }
+  double pdf_li(const Vec3&, const Vec3&, const SurfacePoint*) const override { return 0.0; }
   std::optional<LightLeSample> sample_le(const Vec2& u_pos, const Vec2& u_dir) const override;
   void pdf_le(const Hit& at, const Vec3& w, double* pdf_pos, double* pdf_dir) const override;
   Rgb le(const Vec3&, const Vec3&) const override { return Rgb(0.0); }
@@ -38,7 +38,7 @@ class ConstantEnvironmentLight final : public Light {
   void set_scene_sphere(const SceneSphere& s) override { sphere_ = s; }
 
   std::optional<LightLiSample> sample_li(const Vec3& ref, const Vec2& u) const override;
-  double pdf_li(const Vec3& ref, const Vec3& wi, const Hit* on_light) const override;
+  double pdf_li(const Vec3& ref, const Vec3& wi, const SurfacePoint* on_light) const override;
   std::optional<LightLeSample> sample_le(const Vec2& u_pos, const Vec2& u_dir) const override;
   void pdf_le(const Hit& at, const Vec3& w, double* pdf_pos, double* pdf_dir) const override;
   // Radiance arriving along a ray that escapes the scene (any direction).

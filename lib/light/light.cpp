@@ -4,6 +4,12 @@
 
 namespace tb {
 
+std::optional<LightLiPoint> Light::sample_li_point(const Vec3& ref, const Vec2& u) const {
+  const std::optional<LightLiSample> s = sample_li(ref, u);
+  if (!s) return std::nullopt;
+  return static_cast<const LightLiPoint&>(*s);
+}
+
 Vec3 sample_emission_direction(const Vec3& n, bool two_sided, const Vec2& u) {
   Vec2 uu = u;
   double side = 1.0;

@@ -33,7 +33,9 @@ struct SceneSphere {
   double radius = 1.0;
 };
 
-struct LightLiSample {
+// A light sample for next-event estimation without the emitter point's differential geometry
+// (what a path tracer needs: sample_li_point).
+struct LightLiPoint {
   Vec3 wi{0, 0, 1};      // unit direction from the reference point towards the light
   Rgb li{0.0};           // radiance (or I/d^2, E for delta lights) arriving at the reference point
   double pdf = 0.0;      // solid angle at the reference point; 1 for delta lights
@@ -41,6 +43,9 @@ struct LightLiSample {
   Vec3 n_light{0.0};     // its normal (zero for point lights and infinite lights)
   double distance = kInfinity;  // to p_light, for the shadow ray
   double pdf_area = 0.0; // area density of p_light on the emitter (area lights only)
+};
+
+struct LightLiSample : LightLiPoint {
   Hit hit;               // the emitter point: full geometry for area lights (shadow-ray spawning,
                          // path vertices), p and n only for other lights
 };
@@ -63,9 +68,12 @@ class Light {
   bool is_delta() const { return (flags() & (light_flags::kDeltaPosition | light_flags::kDeltaDirection)) != 0; }
 
   virtual std::optional<LightLiSample> sample_li(const Vec3& ref, const Vec2& u) const = 0;
+  // The same sample (same uniforms, same values) without the Hit: lights whose sample_li builds
+  // a full Hit (area lights) override it with a lean version; the default slices sample_li.
+  virtual std::optional<LightLiPoint> sample_li_point(const Vec3& ref, const Vec2& u) const;
   // Solid-angle density at `ref` of sample_li producing direction wi (unit) that reaches the
   // emitter at `on_light` (a hit on an area light; null for infinite lights). 0 for delta lights.
-  virtual double pdf_li(const Vec3& ref, const Vec3& wi, const Hit* on_light) const = 0;
+  virtual double pdf_li(const Vec3& ref, const Vec3& wi, const SurfacePoint* on_light) const = 0;
 
   virtual std::optional<LightLeSample> sample_le(const Vec2& u_pos, const Vec2& u_dir) const = 0;
   // Densities of sample_le producing a ray from `at` (a point on the emitter: a hit on an area

@@ -13,7 +13,7 @@ class PointLight final : public Light {
   const Vec3& position() const { return p_; }
 
   std::optional<LightLiSample> sample_li(const Vec3& ref, const Vec2& u) const override;
-  double pdf_li(const Vec3&, const Vec3&, const Hit*) const override { return 0.0; }
+  double pdf_li(const Vec3&, const Vec3&, const SurfacePoint*) const override { return 0.0; }
   std::optional<LightLeSample> sample_le(const Vec2& u_pos, const Vec2& u_dir) const override;
   void pdf_le(const Hit& at, const Vec3& w, double* pdf_pos, double* pdf_dir) const override;
   Rgb le(const Vec3&, const Vec3&) const override { return Rgb(0.0); }
@@ -34,7 +34,7 @@ class SpotLight final : public Light {
   uint32_t flags() const override { return light_flags::kDeltaPosition; }
 
   std::optional<LightLiSample> sample_li(const Vec3& ref, const Vec2& u) const override;
-  double pdf_li(const Vec3&, const Vec3&, const Hit*) const override { return 0.0; }
+  double pdf_li(const Vec3&, const Vec3&, const SurfacePoint*) const override { return 0.0; }
   std::optional<LightLeSample> sample_le(const Vec2& u_pos, const Vec2& u_dir) const override;
   void pdf_le(const Hit& at, const Vec3& w, double* pdf_pos, double* pdf_dir) const override;
   Rgb le(const Vec3&, const Vec3&) const override { return Rgb(0.0); }

@@ -18,15 +18,16 @@ LightSampler::LightSampler(const World& world) : lights_(world.lights()) {
     cdf_ = DiscreteCdf::create(uniform);
   }
   for (size_t i = 0; i < lights_.size(); ++i) index_[lights_[i]] = i;
+  if (cdf_) pmf0_ = cdf_->pmf(0);
 }
 
-std::optional<LightSampler::Choice> LightSampler::sample(double u) const {
+std::optional<LightSampler::Choice> LightSampler::sample_general(double u) const {
   if (!cdf_) return std::nullopt;
   const DiscreteSample s = cdf_->sample(u);
   return Choice{lights_[s.index], cdf_->pmf(s.index), s.u_remapped};
 }
 
-double LightSampler::pmf(const Light* light) const {
+double LightSampler::pmf_general(const Light* light) const {
   if (!cdf_) return 0.0;
   const auto it = index_.find(light);
   return it == index_.end() ? 0.0 : cdf_->pmf(it->second);

@@ -5,7 +5,7 @@
 namespace tb {
 
 const Frame& SurfaceScatter::frame_for(const Vec3& wo) const {
-  const bool transmissive = (bsdf_->flags() & bsdf_flags::kTransmission) != 0;
+  const bool transmissive = (flags_ & bsdf_flags::kTransmission) != 0;
   const unsigned side = (!transmissive && glm::dot(wo, hit_->ng) < 0) ? 1u : 0u;
   if (!(built_ & (1u << side))) {
     frames_[side] = Frame::from_z(side ? -hit_->n : hit_->n);
@@ -15,7 +15,7 @@ const Frame& SurfaceScatter::frame_for(const Vec3& wo) const {
 }
 
 bool SurfaceScatter::sides_ok(const Vec3& wo, const Vec3& wi) const {
-  if (bsdf_->flags() & bsdf_flags::kTransmission) return true;
+  if (flags_ & bsdf_flags::kTransmission) return true;
   return glm::dot(wo, hit_->ng) * glm::dot(wi, hit_->ng) > 0;
 }
 
@@ -43,19 +43,12 @@ std::optional<WorldBsdfSample> SurfaceScatter::sample(const Vec3& wo, double uc,
   const Frame& fr = frame_for(wo);
   const auto bs = bsdf_->sample(fr.to_local(wo), uc, u, mode);
   if (!bs || !(bs->pdf > 0)) return std::nullopt;
-  WorldBsdfSample s;
-  s.wi = glm::normalize(fr.to_world(bs->wi));
-  s.pdf = bs->pdf;
-  s.flags = bs->flags;
-  if (!sides_ok(wo, s.wi)) {
-    s.f = Rgb(0.0);
-    s.weight = Rgb(0.0);
-    return s;
-  }
-  const double c = correction(wo, s.wi, mode);
-  s.f = bs->f * c;
-  s.weight = bs->weight * c;  // bs->weight = f |cos wi| / pdf with the (possibly flipped) shading normal
-  return s;
+  const Vec3 wi = glm::normalize(fr.to_world(bs->wi));
+  // Returned as prvalues built in place from every field (see LambertBsdf::sample for why).
+  if (!sides_ok(wo, wi)) return std::optional<WorldBsdfSample>(std::in_place, wi, Rgb(0.0), Rgb(0.0), bs->pdf, bs->flags);
+  const double c = correction(wo, wi, mode);
+  // bs->weight = f |cos wi| / pdf with the (possibly flipped) shading normal
+  return std::optional<WorldBsdfSample>(std::in_place, wi, bs->f * c, bs->weight * c, bs->pdf, bs->flags);
 }
 
 }  // namespace tb

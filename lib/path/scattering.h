@@ -30,7 +30,8 @@ struct WorldBsdfSample {
 
 class SurfaceScatter {
  public:
-  SurfaceScatter(const Hit& hit, const Bsdf& bsdf) : hit_(&hit), bsdf_(&bsdf) {}
+  // `hit` (a Hit or a SurfacePoint) must outlive the object.
+  SurfaceScatter(const SurfacePoint& hit, const Bsdf& bsdf) : hit_(&hit), bsdf_(&bsdf), flags_(bsdf.flags()) {}
 
   Rgb f(const Vec3& wo, const Vec3& wi, TransportMode mode) const;
   double pdf(const Vec3& wo, const Vec3& wi, TransportMode mode) const;
@@ -39,7 +40,8 @@ class SurfaceScatter {
   // |w . n| with the shading normal.
   double abs_cos_shading(const Vec3& w) const { return std::abs(glm::dot(w, hit_->n)); }
   const Bsdf& bsdf() const { return *bsdf_; }
-  const Hit& hit() const { return *hit_; }
+  uint32_t flags() const { return flags_; }  // == bsdf().flags()
+  const SurfacePoint& hit() const { return *hit_; }
 
  private:
   // The shading frame on wo's side, built at most once per side (f, pdf and sample at one vertex
@@ -47,8 +49,9 @@ class SurfaceScatter {
   const Frame& frame_for(const Vec3& wo) const;
   double correction(const Vec3& wo, const Vec3& wi, TransportMode mode) const;
   bool sides_ok(const Vec3& wo, const Vec3& wi) const;
-  const Hit* hit_;
+  const SurfacePoint* hit_;
   const Bsdf* bsdf_;
+  uint32_t flags_;              // bsdf_->flags(), read once (a virtual call)
   mutable Frame frames_[2];     // [0]: from_z(n), [1]: from_z(-n)
   mutable unsigned built_ = 0;  // bit i: frames_[i] is built
 };

@@ -160,6 +160,25 @@ TEST(MisHeuristics, WeightsSumToOne) {
   EXPECT_THROW(heuristic_by_name("nope"), std::invalid_argument);
 }
 
+TEST(MisHeuristics, TwoTechniquePowerHeuristicEqualsGeneric) {
+  Rng r(11);
+  for (int rep = 0; rep < 100000; ++rep) {
+    double a = r.uniform() < 0.05 ? 0.0 : std::exp(200.0 * (r.uniform() - 0.5));
+    const double b = r.uniform() < 0.05 ? 0.0 : std::exp(200.0 * (r.uniform() - 0.5));
+    if (rep % 13 == 0) a = b;  // ties
+    const std::array<double, 2> q{a, b};
+    const double w = power_heuristic_2(a, b), ref = PowerHeuristic{}.weight(q, 0);
+    // Both compute r^2 / (r^2 + 1)-type expressions with a handful of roundings each: 8 ulps.
+    EXPECT_NEAR(w, ref, 8 * 0x1p-53 * std::max(ref, 1e-300)) << a << " " << b;
+    if (a > 0 || b > 0) {
+      EXPECT_NEAR(w + power_heuristic_2(b, a), 1.0, 4 * 0x1p-53);
+    }
+  }
+  EXPECT_EQ(power_heuristic_2(0.0, 0.0), 0.0);
+  EXPECT_EQ(power_heuristic_2(2.0, 2.0), 0.5);
+  EXPECT_EQ(power_heuristic_2(1e300, 1e300), 0.5);  // no overflow of the squares
+}
+
 TEST(Mis, OneSampleBalanceOnConstantRatioIsExact) {
   // f proportional to the balance mixture Σ c_k p_k: every one-sample estimate equals the integral.
   const auto cs = classical_set();
