@@ -119,6 +119,52 @@ int64_t trace_raw_rays() {
   return hits.load();
 }
 
+// The same rays as streams of 1024 (rtcIntersect1M / rtcOccluded1M, incoherent flag): Embree
+// regroups them into packets for its SIMD traversal.
+template <bool kOccluded>
+int64_t trace_raw_streams() {
+  const RTCScene rtc = static_cast<RTCScene>(scene("cornell-box.json").geometry().embree_scene());
+  const std::vector<RTCRay>& rays = raw_rays();
+  std::atomic<int64_t> hits{0};
+  parallel_for(rays.size() / 1024, [&](size_t block) {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    int64_t h = 0;
+    if constexpr (kOccluded) {
+      std::vector<RTCRay> r(rays.begin() + block * 1024, rays.begin() + (block + 1) * 1024);
+      rtcOccluded1M(rtc, &ctx, r.data(), 1024, sizeof(RTCRay));
+      for (const RTCRay& x : r) h += x.tfar < 0;
+    } else {
+      std::vector<RTCRayHit> rh(1024);
+      for (size_t i = 0; i < 1024; ++i) {
+        rh[i].ray = rays[block * 1024 + i];
+        rh[i].hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rh[i].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+      }
+      rtcIntersect1M(rtc, &ctx, rh.data(), 1024, sizeof(RTCRayHit));
+      for (const RTCRayHit& x : rh) h += x.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+    }
+    hits.fetch_add(h, std::memory_order_relaxed);
+  });
+  return hits.load();
+}
+
+template <bool kOccluded>
+void raw_streams_bench(benchmark::State& state) {
+  const std::vector<RTCRay>& rays = raw_rays();
+  ThreadLimit limit(static_cast<size_t>(state.range(0)));
+  int64_t hits = 0;
+  for (auto _ : state) hits += trace_raw_streams<kOccluded>();
+  const double n = double(state.iterations()) * double(rays.size());
+  state.counters["rays/s"] = benchmark::Counter(n, benchmark::Counter::kIsRate);
+  state.counters["hit_fraction"] = double(hits) / n;
+}
+void BM_RawIntersectStream(benchmark::State& state) { raw_streams_bench<false>(state); }
+void BM_RawOccludedStream(benchmark::State& state) { raw_streams_bench<true>(state); }
+BENCHMARK(BM_RawIntersectStream)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RawOccludedStream)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
+
 template <bool kOccluded>
 void raw_rays_bench(benchmark::State& state) {
   const std::vector<RTCRay>& rays = raw_rays();
