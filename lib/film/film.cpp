@@ -1,7 +1,11 @@
 #include "lib/film/film.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
+
+#include "lib/core/parallel.h"
 
 namespace tb {
 
@@ -45,6 +49,16 @@ void Film::merge_tile(const FilmTile& tile) {
   nonfinite_.merge(tile.nonfinite());
 }
 
+void Film::merge_tiles(std::span<const FilmTile> tiles) {
+  constexpr int kBand = 16;  // rows per task
+  parallel_for(size_t((height_ + kBand - 1) / kBand), [&](size_t band) {
+    const int y0 = int(band) * kBand, y1 = std::min(height_, y0 + kBand);
+    for (const FilmTile& t : tiles)
+      if (t.store().y0 < y1 && t.store().y1 > y0) pass_.merge_rows(t, y0, y1);
+  });
+  for (const FilmTile& t : tiles) nonfinite_.merge(t.nonfinite());
+}
+
 void Film::merge_splats(const SplatBuffer& s) {
   for (const auto& e : s.entries()) pass_splat_[e.pixel] += e.value;
   pass_splats_ += int64_t(s.entries().size());
@@ -56,7 +70,10 @@ void Film::end_pass(double splat_scale) {
   if (pass_splats_ > 0 && splat_scale == 0.0)
     throw std::logic_error("Film::end_pass: the pass holds splats but splat_scale is 0 (use P / N for N paths)");
   if (observer_) observed_.assign(welch_.pixels(), Rgb(0.0));
-  for (int y = 0; y < height_; ++y)
+  // Pixels are independent: rows in parallel, empty pixels counted per row and summed.
+  std::vector<int64_t> empty(size_t(height_), 0);
+  parallel_for(size_t(height_), [&](size_t row) {
+    const int y = int(row);
     for (int x = 0; x < width_; ++x) {
       const size_t i = size_t(y) * size_t(width_) + size_t(x);
       const double w = pass_.weight_sum(x, y);
@@ -64,10 +81,12 @@ void Film::end_pass(double splat_scale) {
       if (w > 0.0)
         v += pass_.weighted_sum(x, y) / w;
       else
-        ++empty_pixel_passes_;
+        ++empty[row];
       welch_.add(i, v);
       if (observer_) observed_[i] = v;
     }
+  });
+  for (const int64_t e : empty) empty_pixel_passes_ += e;
   if (observer_) observer_(observed_);
   pass_.clear();
   std::fill(pass_splat_.begin(), pass_splat_.end(), Rgb(0.0));

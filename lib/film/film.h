@@ -15,6 +15,7 @@
 
 #include <functional>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "lib/film/film_tile.h"
@@ -40,6 +41,9 @@ class Film {
   // A tile taking the samples of `pixels`, with storage for its filter footprint.
   FilmTile make_tile(const PixelBounds& pixels) const;
   void merge_tile(const FilmTile& tile);
+  // merge_tile(tiles[0]), merge_tile(tiles[1]), ... with the same result bit for bit, in
+  // parallel over bands of rows (every pixel still receives the tiles' sums in their order).
+  void merge_tiles(std::span<const FilmTile> tiles);
   void merge_splats(const SplatBuffer& splats);
 
   // Closes the pass: one Welch sample per pixel (see above). Pixels that got no filter weight

@@ -25,7 +25,7 @@ void for_each_film_tile(Film& film, int tile_size, F&& f) {
       tiles.push_back(film.make_tile({i * tile_size, j * tile_size, std::min(film.width(), (i + 1) * tile_size),
                                       std::min(film.height(), (j + 1) * tile_size)}));
   parallel_for(tiles.size(), [&](size_t k) { f(tiles[k]); });
-  for (const FilmTile& t : tiles) film.merge_tile(t);
+  film.merge_tiles(tiles);
 }
 
 // Calls f(sample_index, buffer) for sample indices [0, n) in parallel; chunks of chunk_size

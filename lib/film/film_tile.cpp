@@ -41,14 +41,18 @@ bool FilmTile::add_sample(const Vec2& raster, const Rgb& L, uint64_t sample_inde
 }
 
 void FilmTile::merge(const FilmTile& o) {
-  for (int y = o.store_.y0; y < o.store_.y1; ++y)
+  merge_rows(o, o.store_.y0, o.store_.y1);
+  nonfinite_.merge(o.nonfinite_);
+}
+
+void FilmTile::merge_rows(const FilmTile& o, int y0, int y1) {
+  for (int y = std::max(y0, o.store_.y0); y < std::min(y1, o.store_.y1); ++y)
     for (int x = o.store_.x0; x < o.store_.x1; ++x) {
       if (!store_.contains(x, y)) throw std::out_of_range("FilmTile::merge: tile outside the target");
       const size_t i = index(x, y), j = o.index(x, y);
       wl_[i] += o.wl_[j];
       w_[i] += o.w_[j];
     }
-  nonfinite_.merge(o.nonfinite_);
 }
 
 void FilmTile::clear() {

@@ -41,6 +41,10 @@ class FilmTile {
   const NonFiniteLog& nonfinite() const { return nonfinite_; }
   // Adds another tile's sums (of any bounds inside this tile's store) and log into this one.
   void merge(const FilmTile& other);
+  // The sums of rows [y0, y1) of another tile only (its log is left out): tiles merged band by
+  // band in parallel, each band taking the tiles in the same order, add to every pixel in the
+  // order merge() would.
+  void merge_rows(const FilmTile& other, int y0, int y1);
   void clear();
 
  private:

@@ -124,5 +124,32 @@ TEST(FilmAccumulate, BitIdenticalForOneAndTwoThreads) {
   }
 }
 
+// Film::merge_tiles (bands of rows in parallel) against merge_tile one tile after another, with a
+// Gaussian filter so that the tiles' footprints overlap: the sums must agree bit for bit.
+TEST(FilmAccumulate, ParallelTileMergeEqualsSequential) {
+  const auto filter = std::make_shared<GaussianFilter>(Vec2(1.5, 1.5), 0.5);
+  Film seq(37, 29, filter), par(37, 29, filter);
+  std::vector<FilmTile> tiles;
+  for (int j = 0; j < 29; j += 8)
+    for (int i = 0; i < 37; i += 8) tiles.push_back(seq.make_tile({i, j, std::min(37, i + 8), std::min(29, j + 8)}));
+  Rng rng(7);
+  uint64_t index = 0;
+  for (FilmTile& t : tiles)
+    for (int k = 0; k < 200; ++k) {
+      const PixelBounds& p = t.pixels();
+      const Vec2 raster(p.x0 + rng.uniform() * p.width(), p.y0 + rng.uniform() * (p.y1 - p.y0));
+      t.add_sample(raster, Rgb(rng.uniform(), rng.uniform() * 1e3, rng.uniform() * 1e-3), index++);
+    }
+  for (const FilmTile& t : tiles) seq.merge_tile(t);
+  {
+    ThreadLimit limit(2);
+    par.merge_tiles(tiles);
+  }
+  seq.end_pass();
+  par.end_pass();
+  for (size_t i = 0; i < seq.welch().pixels(); ++i) EXPECT_EQ(seq.welch().sum[i], par.welch().sum[i]) << i;
+  EXPECT_EQ(seq.empty_pixel_passes(), par.empty_pixel_passes());
+}
+
 }  // namespace
 }  // namespace tb
