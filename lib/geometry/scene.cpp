@@ -185,43 +185,47 @@ void trace(void* scene, const Ray& ray, double tmax, QueryContext* ctx, RTCRayHi
 
 }  // namespace
 
-std::optional<Hit> Scene::intersect(const Ray& ray, double tmax) const {
-  if (!committed_) throw std::logic_error("Scene::intersect before commit");
+namespace {
+
+// The nearest hit as a Record (Hit or SurfacePoint): mesh_record(mesh, rh, shape_id) refines a
+// triangle hit reported by Embree; an analytic shape's hit was computed in full by its Embree
+// callback, and its Record part is returned.
+template <class Record, class MeshRecord>
+[[gnu::always_inline]] inline std::optional<Record> nearest(void* scene, const std::vector<std::unique_ptr<Scene::Entry>>& entries,
+                              const Ray& ray, double tmax, MeshRecord&& mesh_record) {
   QueryContext ctx;
   RTCRayHit rh;
-  trace(scene_, ray, tmax, &ctx, &rh);
+  trace(scene, ray, tmax, &ctx, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
-  const Entry& e = *entries_[rh.hit.geomID];
-  if (const auto* m = std::get_if<TriangleMesh>(&e.shape)) {
-    std::optional<Hit> h(std::in_place);  // filled in place: no copy of the Hit
-    m->refine_hit(rh.hit.primID, ray, rh.ray.tfar, Vec2(rh.hit.u, rh.hit.v), &*h);
-    h->shape_id = e.id;
-    return h;
-  }
+  const Scene::Entry& e = *entries[rh.hit.geomID];
+  if (const auto* m = std::get_if<TriangleMesh>(&e.shape)) return mesh_record(*m, rh, e.id);
   // The last analytic hit accepted has the smallest t among analytic shapes, and it is the
   // final one since geomID names an analytic shape.
   if (!ctx.analytic_hit || ctx.analytic_hit->shape_id != e.id) throw std::logic_error("Scene: lost analytic hit");
   if (!(ctx.analytic_hit->t < std::min(tmax, ray.t_max))) return std::nullopt;  // float tfar rounded up past tmax
-  return ctx.analytic_hit;
+  return std::optional<Record>(std::in_place, static_cast<const Record&>(*ctx.analytic_hit));
+}
+
+}  // namespace
+
+std::optional<Hit> Scene::intersect(const Ray& ray, double tmax) const {
+  if (!committed_) throw std::logic_error("Scene::intersect before commit");
+  return nearest<Hit>(scene_, entries_, ray, tmax, [&](const TriangleMesh& m, const RTCRayHit& rh, uint32_t id) {
+    std::optional<Hit> h(std::in_place);  // filled in place: no copy of the Hit
+    m.refine_hit(rh.hit.primID, ray, rh.ray.tfar, Vec2(rh.hit.u, rh.hit.v), &*h);
+    h->shape_id = id;
+    return h;
+  });
 }
 
 std::optional<SurfacePoint> Scene::intersect_point(const Ray& ray, double tmax) const {
   if (!committed_) throw std::logic_error("Scene::intersect before commit");
-  QueryContext ctx;
-  RTCRayHit rh;
-  trace(scene_, ray, tmax, &ctx, &rh);
-  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
-  const Entry& e = *entries_[rh.hit.geomID];
-  if (const auto* m = std::get_if<TriangleMesh>(&e.shape)) {
+  return nearest<SurfacePoint>(scene_, entries_, ray, tmax, [&](const TriangleMesh& m, const RTCRayHit& rh, uint32_t id) {
     // Built by value (no zero-filled record overwritten field by field).
-    SurfacePoint p = m->refine_point(rh.hit.primID, ray, rh.ray.tfar, Vec2(rh.hit.u, rh.hit.v));
-    p.shape_id = e.id;
-    return p;
-  }
-  // As in intersect(); analytic shapes compute their full Hit in the Embree callback anyway.
-  if (!ctx.analytic_hit || ctx.analytic_hit->shape_id != e.id) throw std::logic_error("Scene: lost analytic hit");
-  if (!(ctx.analytic_hit->t < std::min(tmax, ray.t_max))) return std::nullopt;  // float tfar rounded up past tmax
-  return static_cast<const SurfacePoint&>(*ctx.analytic_hit);
+    SurfacePoint p = m.refine_point(rh.hit.primID, ray, rh.ray.tfar, Vec2(rh.hit.u, rh.hit.v));
+    p.shape_id = id;
+    return std::optional<SurfacePoint>(p);
+  });
 }
 
 bool Scene::occluded(const Ray& ray, double tmax) const {
