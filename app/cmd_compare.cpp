@@ -44,6 +44,9 @@ int compare_images(const CompareArgs& a) {
              r.rejects_sum_z2() ? "  REJECTS" : "");
   if (r.zero_variance_mismatch > 0)
     fmt::print("  {} pixel-channels with zero variance in both images and different means\n", r.zero_variance_mismatch);
+  if (r.skipped_below_float_range > 0)
+    fmt::print("  {} pixel-channels skipped: means below 1.1e-19, whose variance a float EXR cannot hold\n",
+               r.skipped_below_float_range);
   if (r.worst.x >= 0)
     fmt::print("  worst pixel ({}, {}) {}: A {:.6g}, B {:.6g}, t = {:.4g}, dof {:.4g}, p = {:.4g}\n", r.worst.x,
                r.worst.y, r.worst.channel >= 0 && r.worst.channel < 3 ? kChannel[r.worst.channel] : "?", r.worst.mean_a,

@@ -11,7 +11,10 @@
 // smallest p is Šidák-adjusted over the three; the reported statistic is that channel's.
 // z_i is the normal quantile with the same two-sided p-value and the sign of t_i, so z_i is
 // standard normal under H0 whatever the Welch dof. Pixel-channels where both images have zero
-// variance are skipped when their means agree and count as hard failures when they differ.
+// variance are skipped when their means agree and count as hard failures when they differ,
+// unless both means are below sqrt(FLT_MIN) ~ 1.1e-19 in magnitude: images read from EXR carry
+// their variance in float, where the variance of such values (~mean^2) underflows to 0, so
+// there "zero variance" means "not stored", and those pixel-channels are skipped and counted.
 #pragma once
 
 #include <cstdint>
@@ -35,6 +38,7 @@ struct ImageCompareResult {
   int64_t tested = 0;               // P
   int64_t skipped_identical = 0;    // zero variance in both, equal means
   int64_t zero_variance_mismatch = 0;
+  int64_t skipped_below_float_range = 0;  // zero variance in both, different means, |means| < sqrt(FLT_MIN)
   PixelChannelTest worst;           // smallest p
   double p_pixel_family = 1;        // Šidák-adjusted smallest p: 1 - (1 - p_min)^P
   stats::TestResult stouffer, sum_z2;  // of the channel with the smallest p; p Šidák-adjusted over 3

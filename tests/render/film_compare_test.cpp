@@ -59,6 +59,25 @@ TEST(FilmCompare, KnownReferenceAndZeroVarianceCases) {
   EXPECT_EQ(r.skipped_identical, 2);
   EXPECT_EQ(r.zero_variance_mismatch, 1);
   EXPECT_TRUE(r.rejects());
+  // Means of ~1e-40 with zero variance (an EXR's float variance of such values underflows): not
+  // testable, skipped; the same zero-variance mismatch at 1e-18 still rejects.
+  WelchImage t1(1, 1), t2(1, 1), u1(1, 1), u2(1, 1);
+  for (int i = 0; i < 3; ++i) {
+    t1.add(0, Rgb(1e-40, 0.0, 0.0));
+    t2.add(0, Rgb(2e-38, 0.0, 0.0));
+    u1.add(0, Rgb(1e-18, 0.0, 0.0));
+    u2.add(0, Rgb(2e-18, 0.0, 0.0));
+  }
+  t1.set_from_moments(0, t1.mean(0), Rgb(0.0), 3);
+  t2.set_from_moments(0, t2.mean(0), Rgb(0.0), 3);
+  u1.set_from_moments(0, u1.mean(0), Rgb(0.0), 3);
+  u2.set_from_moments(0, u2.mean(0), Rgb(0.0), 3);
+  const auto tiny = compare_welch_images(t1, t2, 0.01);
+  EXPECT_EQ(tiny.skipped_below_float_range, 1);
+  EXPECT_FALSE(tiny.rejects()) << tiny.message();
+  const auto small = compare_welch_images(u1, u2, 0.01);
+  EXPECT_EQ(small.zero_variance_mismatch, 1);
+  EXPECT_TRUE(small.rejects());
 }
 
 }  // namespace
