@@ -8,11 +8,11 @@
 // in a parameterisation (u, v) that can be re-evaluated at a moved point (Scene::surface_at).
 //
 // SurfacePoint is the lean part of it (128 bytes instead of 224): everything a path tracer needs
-// to shade a vertex and to spawn rays from it (position, normals, error bound, ids). Queries that
-// return a SurfacePoint (Scene::intersect_point, Scene::sample_point_into) compute these fields
-// with the very expressions of the full queries, so a SurfacePoint equals the SurfacePoint part
-// of the corresponding Hit bit for bit. Functions that need only these fields take a
-// `const SurfacePoint&`, which a Hit binds to.
+// to shade a vertex and to spawn rays from it (position, normals, error bound, ids).
+// Scene::sample_point computes these fields with the very expressions of the full query, so its
+// SurfacePoint equals the SurfacePoint part of the corresponding Hit bit for bit;
+// Scene::intersect_point differs on triangles by using Embree's float barycentrics (see there).
+// Functions that need only these fields take a `const SurfacePoint&`, which a Hit binds to.
 // All quantities are in world space and double precision.
 #pragma once
 

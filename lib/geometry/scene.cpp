@@ -187,6 +187,13 @@ void trace(void* scene, const Ray& ray, double tmax, QueryContext* ctx, RTCRayHi
 
 namespace {
 
+// Barycentrics (b1, b2) moved into the triangle: negative ones to 0, a sum above 1 scaled to 1.
+Vec2 clamp_to_triangle(Vec2 uv) {
+  uv = glm::max(uv, Vec2(0.0));
+  const double s = uv.x + uv.y;
+  return s > 1 ? uv / s : uv;
+}
+
 // The nearest hit as a Record (Hit or SurfacePoint): mesh_record(mesh, rh, shape_id) refines a
 // triangle hit reported by Embree; an analytic shape's hit was computed in full by its Embree
 // callback, and its Record part is returned.
@@ -221,8 +228,13 @@ std::optional<Hit> Scene::intersect(const Ray& ray, double tmax) const {
 std::optional<SurfacePoint> Scene::intersect_point(const Ray& ray, double tmax) const {
   if (!committed_) throw std::logic_error("Scene::intersect before commit");
   return nearest<SurfacePoint>(scene_, entries_, ray, tmax, [&](const TriangleMesh& m, const RTCRayHit& rh, uint32_t id) {
-    // Built by value (no zero-filled record overwritten field by field).
-    SurfacePoint p = m.refine_point(rh.hit.primID, ray, rh.ray.tfar, Vec2(rh.hit.u, rh.hit.v));
+    // Embree's own barycentrics, not re-intersected in double: the point b0 p0 + b1 p1 + b2 p2
+    // is evaluated in double, so it lies on the triangle's plane to double precision and the
+    // spawn offset (point_at's float-level bound) is as valid as for an area-sampled point; it
+    // sits within float rounding (~1e-7 of the size) of the double ray's exact hit, which moves
+    // no estimate measurably. Clamped into the triangle like refine_hit's barycentrics.
+    SurfacePoint p = m.point_at(rh.hit.primID, clamp_to_triangle(Vec2(rh.hit.u, rh.hit.v)));
+    p.t = rh.ray.tfar;
     p.shape_id = id;
     return std::optional<SurfacePoint>(p);
   });

@@ -35,8 +35,10 @@ class Scene {
   // Nearest hit with ray.t_min < t < min(ray.t_max, tmax) (rtcIntersect1). Thread-safe after
   // commit().
   std::optional<Hit> intersect(const Ray& ray, double tmax = kInfinity) const;
-  // The same query without differential geometry (integrators): the SurfacePoint part of the Hit
-  // intersect() would return.
+  // The same query without differential geometry, for the path tracer: the SurfacePoint part of
+  // the Hit intersect() would return, except that a triangle hit keeps Embree's float
+  // barycentrics (clamped into the triangle) instead of re-intersecting the double ray: the point
+  // is the same within float rounding, t is Embree's. Analytic shapes: the same record.
   std::optional<SurfacePoint> intersect_point(const Ray& ray, double tmax = kInfinity) const;
   // Any hit with ray.t_min < t < min(ray.t_max, tmax) (rtcOccluded1). Shadow rays from
   // spawn_ray_to carry t_max = 1 - kShadowEpsilon already.
