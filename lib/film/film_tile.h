@@ -51,8 +51,22 @@ class FilmTile {
   size_t index(int x, int y) const {
     return static_cast<size_t>(y - store_.y0) * static_cast<size_t>(store_.width()) + static_cast<size_t>(x - store_.x0);
   }
+  // The general case of add_sample (any filter; L and raster finite): every pixel in the
+  // filter's reach; and the log of a rejected sample. Neither is inlined, so that the common
+  // case (box fast path) keeps a short prologue.
+  [[gnu::noinline]] void add_filtered(const Vec2& raster, const Rgb& L);
+  [[gnu::noinline, gnu::cold]] void reject(const Vec2& raster, const Rgb& L, uint64_t sample_index);
+  // Adds weight w and w L to the sums of store pixel i (the one accumulation of both paths of
+  // add_sample).
+  void accumulate(size_t i, double w, const Rgb& L) {
+    wl_[i] += w * L;
+    w_[i] += w;
+  }
   PixelBounds pixels_, store_;
   std::shared_ptr<const Filter> filter_;
+  // The filter is a BoxFilter of radius 0.5 (the default "box"): add_sample then takes its
+  // one-pixel fast path instead of two virtual calls per pixel of the footprint.
+  bool unit_box_ = false;
   std::vector<Rgb> wl_;
   std::vector<double> w_;
   NonFiniteLog nonfinite_;

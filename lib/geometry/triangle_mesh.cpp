@@ -44,10 +44,8 @@ double TriangleMesh::triangle_area(uint32_t prim) const {
   return 0.5 * glm::length(glm::cross(pos_[t[1]] - pos_[t[0]], pos_[t[2]] - pos_[t[0]]));
 }
 
-SurfacePoint TriangleMesh::point_at(uint32_t prim, const Vec2& uv, double t_hit) const {
-  const glm::uvec3 t = tris_[prim];
-  const Vec3 &p0 = pos_[t[0]], &p1 = pos_[t[1]], &p2 = pos_[t[2]];
-  const double b1 = uv.x, b2 = uv.y, b0 = 1 - b1 - b2;
+inline void TriangleMesh::normals(uint32_t prim, const glm::uvec3& t, double b0, double b1, double b2, Vec3* ng_out,
+                                  Vec3* n_out) const {
   Vec3 ng = frames_[prim].ng, n = ng;
   if (!nrm_.empty()) {
     const Vec3 a = b0 * nrm_[t[0]] + b1 * nrm_[t[1]] + b2 * nrm_[t[2]];
@@ -59,6 +57,16 @@ SurfacePoint TriangleMesh::point_at(uint32_t prim, const Vec2& uv, double t_hit)
     n = -n;
     ng = -ng;
   }
+  *ng_out = ng;
+  *n_out = n;
+}
+
+SurfacePoint TriangleMesh::point_at(uint32_t prim, const Vec2& uv, double t_hit) const {
+  const glm::uvec3 t = tris_[prim];
+  const Vec3 &p0 = pos_[t[0]], &p1 = pos_[t[1]], &p2 = pos_[t[2]];
+  const double b1 = uv.x, b2 = uv.y, b0 = 1 - b1 - b2;
+  Vec3 ng, n;
+  normals(prim, t, b0, b1, b2, &ng, &n);
   // Embree intersects in float: the bound covers its float arithmetic on coordinates of this
   // magnitude (pbrt-v3 Sec. 3.9.6 uses gamma_7 for its own float test; we allow more for
   // Embree's different formulation and for the float rounding of the ray origin).
@@ -66,7 +74,7 @@ SurfacePoint TriangleMesh::point_at(uint32_t prim, const Vec2& uv, double t_hit)
   // still needs an offset in z.
   const Vec3 mag = abs_components(b0 * p0) + abs_components(b1 * p1) + abs_components(b2 * p2);
   const Vec3 p_error(gamma_f(32) * max_component(mag));
-  return SurfacePoint{b0 * p0 + b1 * p1 + b2 * p2, ng, n, uv, 0u, prim, t_hit, p_error};
+  return SurfacePoint{position(t, b0, b1, b2), ng, n, uv, 0u, prim, t_hit, p_error};
 }
 
 void TriangleMesh::surface_at(uint32_t prim, const Vec2& uv, Hit* out) const {
@@ -136,11 +144,6 @@ void TriangleMesh::refine_hit(uint32_t prim, const Ray& ray, double t_float, con
   h->t = t;
 }
 
-SurfacePoint TriangleMesh::refine_point(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float) const {
-  double t = 0.0;
-  const Vec2 uv = refine_uv(prim, ray, t_float, uv_float, &t);
-  return point_at(prim, uv, t);
-}
 
 Vec2 TriangleMesh::texcoord(uint32_t prim, const Vec2& uv) const {
   if (uv_.empty()) return uv;
@@ -171,7 +174,7 @@ size_t upper_bound_branchless(const std::vector<double>& cdf, double x) {
 
 }  // namespace
 
-uint32_t TriangleMesh::sample_uv(const Vec2& u, Vec2* uv) const {
+inline uint32_t TriangleMesh::sample_uv(const Vec2& u, Vec2* uv) const {
   const double target = u.x * total_area_;
   const size_t i = upper_bound_branchless(cdf_, target);
   const uint32_t prim = static_cast<uint32_t>(std::min(i, cdf_.size() - 1));
@@ -188,6 +191,16 @@ double TriangleMesh::sample_area(const Vec2& u, Hit* h) const {
   const uint32_t prim = sample_uv(u, &uv);
   surface_at(prim, uv, h);
   return 1.0 / total_area_;
+}
+
+TriangleMesh::PositionNormal TriangleMesh::sample_position(const Vec2& u) const {
+  Vec2 uv;
+  const uint32_t prim = sample_uv(u, &uv);
+  const glm::uvec3 t = tris_[prim];
+  const double b1 = uv.x, b2 = uv.y, b0 = 1 - b1 - b2;  // as in point_at
+  Vec3 ng, n;
+  normals(prim, t, b0, b1, b2, &ng, &n);  // ng unused: its side test is dead code here
+  return {position(t, b0, b1, b2), n};
 }
 
 SurfacePoint TriangleMesh::sample_point(const Vec2& u, double* pdf_area) const {

@@ -51,7 +51,6 @@ class TriangleMesh {
     return h;
   }
   void refine_hit(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float, Hit* h) const;
-  SurfacePoint refine_point(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float) const;
   Vec2 texcoord(uint32_t prim, const Vec2& uv) const;
 
   double area() const { return total_area_; }
@@ -62,6 +61,13 @@ class TriangleMesh {
   // The same point written into *h; returns its density per unit area.
   double sample_area(const Vec2& u, Hit* h) const;
   SurfacePoint sample_point(const Vec2& u, double* pdf_area) const;
+  // Position and shading normal of the point sample_point(u) returns, bit for bit, without the
+  // fields next-event estimation does not read (error bound, side of ng, ids): AreaLight samples
+  // its mesh with this directly, not through Scene::sample_point. Density pdf_area().
+  struct PositionNormal {
+    Vec3 p, n;
+  };
+  PositionNormal sample_position(const Vec2& u) const;
   double pdf_area() const { return 1.0 / total_area_; }
 
  private:
@@ -78,10 +84,19 @@ class TriangleMesh {
   };
   std::vector<TriangleFrame> frames_;
   SurfacePoint point_at(uint32_t prim, const Vec2& uv, double t) const;
+  // The two halves of point_at, shared with sample_position: the point b0 p0 + b1 p1 + b2 p2 of
+  // triangle t, and the shading normal *n with the geometric normal *ng on its side (flip_
+  // applied to both). Inlined so that sample_position drops the ng it does not use.
+  Vec3 position(const glm::uvec3& t, double b0, double b1, double b2) const {
+    return b0 * pos_[t[0]] + b1 * pos_[t[1]] + b2 * pos_[t[2]];
+  }
+  [[gnu::always_inline]] void normals(uint32_t prim, const glm::uvec3& t, double b0, double b1, double b2, Vec3* ng,
+                                      Vec3* n) const;
   // Refined (t, barycentrics) of a float hit; uv_float / t_float when the ray is parallel.
   Vec2 refine_uv(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float, double* t) const;
-  // Triangle and barycentrics of an area sample.
-  uint32_t sample_uv(const Vec2& u, Vec2* uv) const;
+  // Triangle and barycentrics of an area sample (inlined: a few dozen instructions, called once per
+  // light sample).
+  [[gnu::always_inline]] uint32_t sample_uv(const Vec2& u, Vec2* uv) const;
   std::vector<double> cdf_;  // cumulative triangle areas, cdf_.back() == total_area_
   double total_area_ = 0;
   bool flip_;

@@ -3,7 +3,8 @@
 namespace tb {
 
 AreaLight::AreaLight(const Scene& scene, uint32_t shape_id, const Rgb& radiance, bool two_sided)
-    : scene_(&scene), shape_id_(shape_id), radiance_(radiance), two_sided_(two_sided) {
+    : scene_(&scene), shape_id_(shape_id), radiance_(radiance), two_sided_(two_sided),
+      mesh_(scene.is_mesh(shape_id) ? &scene.mesh(shape_id) : nullptr) {
   // A = E[1 / pdf_A(x)] for x drawn from the area sampler (exact when pdf_A is constant).
   constexpr int kN = 64;
   CompensatedSum sum;
@@ -22,16 +23,16 @@ Rgb AreaLight::le(const Vec3& n, const Vec3& w) const {
 
 double AreaLight::pdf_area(const SurfacePoint& h) const { return scene_->pdf_area(h); }
 
-std::optional<LightLiPoint> AreaLight::li_from(const Vec3& ref, const SurfacePoint& at, double pdf_area) const {
-  const Vec3 d = at.p - ref;
+std::optional<LightLiPoint> AreaLight::li_from(const Vec3& ref, const Vec3& p, const Vec3& n, double pdf_area) const {
+  const Vec3 d = p - ref;
   const double dist2 = glm::dot(d, d);
   const double dist = std::sqrt(dist2);
   const Vec3 wi = d * (1.0 / dist);  // one division instead of three (within an ulp of d / dist)
-  const double cos_light = std::abs(glm::dot(at.n, wi));
+  const double cos_light = std::abs(glm::dot(n, wi));
   if (!(pdf_area > 0) || !(dist2 > 0) || !(cos_light > 0)) return std::nullopt;
   // A prvalue built in place from every field: no zero-filled record, no copy.
-  return std::optional<LightLiPoint>(std::in_place, wi, le(at.n, -wi),
-                                     pdf_area * dist2 / cos_light /* area -> solid angle at ref */, at.p, at.n, dist,
+  return std::optional<LightLiPoint>(std::in_place, wi, le(n, -wi),
+                                     pdf_area * dist2 / cos_light /* area -> solid angle at ref */, p, n, dist,
                                      pdf_area);
 }
 
@@ -41,7 +42,7 @@ std::optional<LightLiSample> AreaLight::sample_li(const Vec3& ref, const Vec2& u
   std::optional<LightLiSample> out(std::in_place);
   LightLiSample& ls = *out;
   const double pdf_area = scene_->sample_area_into(shape_id_, u, &ls.hit);
-  if (const auto p = li_from(ref, ls.hit, pdf_area))
+  if (const auto p = li_from(ref, ls.hit.p, ls.hit.n, pdf_area))
     static_cast<LightLiPoint&>(ls) = *p;
   else
     out.reset();
@@ -49,10 +50,15 @@ std::optional<LightLiSample> AreaLight::sample_li(const Vec3& ref, const Vec2& u
 }
 
 std::optional<LightLiPoint> AreaLight::sample_li_point(const Vec3& ref, const Vec2& u) const {
-  // The point only: no derivatives are computed (Scene::sample_point).
+  // The point only: no derivatives are computed. Meshes: the p and n Scene::sample_point would
+  // give (TriangleMesh::sample_position), with its density 1 / area.
+  if (mesh_) {
+    const TriangleMesh::PositionNormal at = mesh_->sample_position(u);
+    return li_from(ref, at.p, at.n, mesh_->pdf_area());
+  }
   double pdf_area = 0.0;
   const SurfacePoint at = scene_->sample_point(shape_id_, u, &pdf_area);
-  return li_from(ref, at, pdf_area);
+  return li_from(ref, at.p, at.n, pdf_area);
 }
 
 double AreaLight::pdf_li(const Vec3& ref, const Vec3& wi, const SurfacePoint* on_light) const {

@@ -35,12 +35,18 @@ class AreaLight final : public Light {
   double area() const { return area_; }
 
  private:
-  // The sample at the emitter point `at` (area density pdf_area); empty when it is unusable.
-  std::optional<LightLiPoint> li_from(const Vec3& ref, const SurfacePoint& at, double pdf_area) const;
+  // The sample at the emitter point p with shading normal n (area density pdf_area); empty
+  // when it is unusable.
+  std::optional<LightLiPoint> li_from(const Vec3& ref, const Vec3& p, const Vec3& n, double pdf_area) const;
   const Scene* scene_;
   uint32_t shape_id_;
   Rgb radiance_;
   bool two_sided_;
+  // The emitter's mesh when it is a triangle mesh (null for analytic shapes): next-event
+  // estimation samples it directly, TriangleMesh::sample_position instead of
+  // Scene::sample_point (no shape lookup, no error bound or ids that li_from never reads).
+  // Stable: the scene is committed when the light is built, and no shape is added after commit.
+  const TriangleMesh* mesh_ = nullptr;
   double area_ = 0.0;
 };
 

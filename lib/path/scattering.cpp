@@ -1,17 +1,13 @@
 #include "lib/path/scattering.h"
 
 #include <cmath>
+#include <memory>
 
 namespace tb {
 
-const Frame& SurfaceScatter::frame_for(const Vec3& wo) const {
-  const bool transmissive = (flags_ & bsdf_flags::kTransmission) != 0;
-  const unsigned side = (!transmissive && glm::dot(wo, hit_->ng) < 0) ? 1u : 0u;
-  if (!(built_ & (1u << side))) {
-    frames_[side] = Frame::from_z(side ? -hit_->n : hit_->n);
-    built_ |= 1u << side;
-  }
-  return frames_[side];
+void SurfaceScatter::build_frame(unsigned side) const {
+  std::construct_at(&frames_[side].frame, Frame::from_z(side ? -hit_->n : hit_->n));
+  built_ |= 1u << side;
 }
 
 bool SurfaceScatter::sides_ok(const Vec3& wo, const Vec3& wi) const {

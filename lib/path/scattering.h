@@ -45,14 +45,26 @@ class SurfaceScatter {
 
  private:
   // The shading frame on wo's side, built at most once per side (f, pdf and sample at one vertex
-  // share it).
-  const Frame& frame_for(const Vec3& wo) const;
+  // share it). Inline: after the first call this is a dot product and a bit test.
+  const Frame& frame_for(const Vec3& wo) const {
+    const bool transmissive = (flags_ & bsdf_flags::kTransmission) != 0;
+    const unsigned side = (!transmissive && glm::dot(wo, hit_->ng) < 0) ? 1u : 0u;
+    if (!(built_ & (1u << side))) build_frame(side);
+    return frames_[side].frame;
+  }
+  void build_frame(unsigned side) const;
   double correction(const Vec3& wo, const Vec3& wi, TransportMode mode) const;
   bool sides_ok(const Vec3& wo, const Vec3& wi) const;
   const SurfacePoint* hit_;
   const Bsdf* bsdf_;
   uint32_t flags_;              // bsdf_->flags(), read once (a virtual call)
-  mutable Frame frames_[2];     // [0]: from_z(n), [1]: from_z(-n)
+  // Storage for a frame that is left uninitialised until build_frame constructs it: two
+  // default-constructed Frames (18 doubles) would otherwise be written for every vertex.
+  union FrameSlot {
+    FrameSlot() {}
+    Frame frame;
+  };
+  mutable FrameSlot frames_[2];  // [0]: from_z(n), [1]: from_z(-n), valid where built_ says
   mutable unsigned built_ = 0;  // bit i: frames_[i] is built
 };
 
