@@ -6,6 +6,7 @@
 #include "lib/core/rng.h"
 #include "lib/film/film.h"
 #include "lib/film/film_parallel.h"
+#include "lib/film/filter.h"
 
 namespace tb {
 namespace {
@@ -122,6 +123,36 @@ TEST(FilmAccumulate, BitIdenticalForOneAndTwoThreads) {
     EXPECT_EQ(a.welch().sum[i], b.welch().sum[i]) << i;
     EXPECT_EQ(a.welch().sum_sq[i], b.welch().sum_sq[i]) << i;
   }
+}
+
+// The same weights as BoxFilter(0.5), but not a BoxFilter: FilmTile takes its general loop.
+class LoopBoxFilter final : public Filter {
+ public:
+  std::string_view name() const override { return "loop-box"; }
+  Vec2 radius() const override { return Vec2(0.5); }
+  double eval(const Vec2& d) const override { return BoxFilter(Vec2(0.5)).eval(d); }
+};
+
+// FilmTile's one-pixel path for BoxFilter(0.5) against the general footprint loop: integer,
+// half-integer, tiny, negative, out-of-tile and far positions; sums equal bit for bit.
+TEST(FilmAccumulate, UnitBoxFastPathEqualsFilterLoop) {
+  const PixelBounds px{3, 2, 11, 9}, store{2, 1, 12, 10};
+  FilmTile fast(px, store, std::make_shared<BoxFilter>()), loop(px, store, std::make_shared<LoopBoxFilter>());
+  std::vector<Vec2> pos = {{3.0, 2.0},  {4.5, 5.5},    {11.0, 9.0},     {2.0, 1.0},  {12.0, 10.0}, {1e-300, 3.2},
+                           {-0.0, 4.0}, {-1e-17, 4.0}, {7.999999, 3.0}, {1e30, 5.0}, {5.0, -3.5}};
+  Rng rng(3);
+  for (int k = 0; k < 20000; ++k) pos.emplace_back(rng.uniform() * 14.0 - 1.0, rng.uniform() * 12.0 - 1.0);
+  uint64_t index = 0;
+  for (const Vec2& p : pos) {
+    const Rgb L(rng.uniform(), rng.uniform() * 100.0, 1.0 / (1e-3 + rng.uniform()));
+    EXPECT_EQ(fast.add_sample(p, L, index), loop.add_sample(p, L, index));
+    ++index;
+  }
+  for (int y = store.y0; y < store.y1; ++y)
+    for (int x = store.x0; x < store.x1; ++x) {
+      EXPECT_EQ(fast.weighted_sum(x, y), loop.weighted_sum(x, y)) << x << "," << y;
+      EXPECT_EQ(fast.weight_sum(x, y), loop.weight_sum(x, y)) << x << "," << y;
+    }
 }
 
 // Film::merge_tiles (bands of rows in parallel) against merge_tile one tile after another, with a
