@@ -194,50 +194,55 @@ Vec2 clamp_to_triangle(Vec2 uv) {
   return s > 1 ? uv / s : uv;
 }
 
-// The nearest hit as a Record (Hit or SurfacePoint): mesh_record(mesh, rh, shape_id) refines a
-// triangle hit reported by Embree; an analytic shape's hit was computed in full by its Embree
-// callback, and its Record part is returned.
-template <class Record, class MeshRecord>
-[[gnu::always_inline]] inline std::optional<Record> nearest(void* scene, const std::vector<std::unique_ptr<Scene::Entry>>& entries,
-                              const Ray& ray, double tmax, MeshRecord&& mesh_record) {
-  QueryContext ctx;
-  RTCRayHit rh;
-  trace(scene, ray, tmax, &ctx, &rh);
-  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
-  const Scene::Entry& e = *entries[rh.hit.geomID];
-  if (const auto* m = std::get_if<TriangleMesh>(&e.shape)) return mesh_record(*m, rh, e.id);
-  // The last analytic hit accepted has the smallest t among analytic shapes, and it is the
-  // final one since geomID names an analytic shape.
-  if (!ctx.analytic_hit || ctx.analytic_hit->shape_id != e.id) throw std::logic_error("Scene: lost analytic hit");
-  if (!(ctx.analytic_hit->t < std::min(tmax, ray.t_max))) return std::nullopt;  // float tfar rounded up past tmax
-  return std::optional<Record>(std::in_place, static_cast<const Record&>(*ctx.analytic_hit));
+// Traces the ray and returns the entry of the nearest shape, nullptr for none; Embree's hit is in
+// *rh. For an analytic shape, ctx->analytic_hit holds its full double hit, computed by its Embree
+// callback (the last one accepted has the smallest t among analytic shapes, and it is the final
+// one since geomID names an analytic shape), checked to lie before min(tmax, ray.t_max).
+const Scene::Entry* trace_nearest(void* scene, const std::vector<std::unique_ptr<Scene::Entry>>& entries,
+                                  const Ray& ray, double tmax, QueryContext* ctx, RTCRayHit* rh) {
+  trace(scene, ray, tmax, ctx, rh);
+  if (rh->hit.geomID == RTC_INVALID_GEOMETRY_ID) return nullptr;
+  const Scene::Entry* e = entries[rh->hit.geomID].get();
+  if (std::holds_alternative<TriangleMesh>(e->shape)) return e;
+  if (!ctx->analytic_hit || ctx->analytic_hit->shape_id != e->id) throw std::logic_error("Scene: lost analytic hit");
+  if (!(ctx->analytic_hit->t < std::min(tmax, ray.t_max))) return nullptr;  // float tfar rounded up past tmax
+  return e;
 }
 
 }  // namespace
 
 std::optional<Hit> Scene::intersect(const Ray& ray, double tmax) const {
   if (!committed_) throw std::logic_error("Scene::intersect before commit");
-  return nearest<Hit>(scene_, entries_, ray, tmax, [&](const TriangleMesh& m, const RTCRayHit& rh, uint32_t id) {
-    std::optional<Hit> h(std::in_place);  // filled in place: no copy of the Hit
-    m.refine_hit(rh.hit.primID, ray, rh.ray.tfar, Vec2(rh.hit.u, rh.hit.v), &*h);
-    h->shape_id = id;
-    return h;
-  });
+  QueryContext ctx;
+  RTCRayHit rh;
+  const Entry* e = trace_nearest(scene_, entries_, ray, tmax, &ctx, &rh);
+  if (!e) return std::nullopt;
+  const auto* m = std::get_if<TriangleMesh>(&e->shape);
+  if (!m) return ctx.analytic_hit;
+  std::optional<Hit> h(std::in_place);  // filled in place: no copy of the Hit
+  m->refine_hit(rh.hit.primID, ray, rh.ray.tfar, Vec2(rh.hit.u, rh.hit.v), &*h);
+  h->shape_id = e->id;
+  return h;
 }
 
-std::optional<SurfacePoint> Scene::intersect_point(const Ray& ray, double tmax) const {
+bool Scene::intersect_point(const Ray& ray, SurfacePoint* out, double tmax) const {
   if (!committed_) throw std::logic_error("Scene::intersect before commit");
-  return nearest<SurfacePoint>(scene_, entries_, ray, tmax, [&](const TriangleMesh& m, const RTCRayHit& rh, uint32_t id) {
+  QueryContext ctx;
+  RTCRayHit rh;
+  const Entry* e = trace_nearest(scene_, entries_, ray, tmax, &ctx, &rh);
+  if (!e) return false;
+  if (const auto* m = std::get_if<TriangleMesh>(&e->shape)) {
     // Embree's own barycentrics, not re-intersected in double: the point b0 p0 + b1 p1 + b2 p2
     // is evaluated in double, so it lies on the triangle's plane to double precision and the
-    // spawn offset (point_at's float-level bound) is as valid as for an area-sampled point; it
+    // spawn offset (point_into's float-level bound) is as valid as for an area-sampled point; it
     // sits within float rounding (~1e-7 of the size) of the double ray's exact hit, which moves
     // no estimate measurably. Clamped into the triangle like refine_hit's barycentrics.
-    SurfacePoint p = m.point_at(rh.hit.primID, clamp_to_triangle(Vec2(rh.hit.u, rh.hit.v)));
-    p.t = rh.ray.tfar;
-    p.shape_id = id;
-    return std::optional<SurfacePoint>(p);
-  });
+    m->point_into(rh.hit.primID, clamp_to_triangle(Vec2(rh.hit.u, rh.hit.v)), rh.ray.tfar, out);
+    out->shape_id = e->id;
+  } else {
+    *out = *ctx.analytic_hit;
+  }
+  return true;
 }
 
 bool Scene::occluded(const Ray& ray, double tmax) const {

@@ -39,7 +39,10 @@ class Scene {
   // the Hit intersect() would return, except that a triangle hit keeps Embree's float
   // barycentrics (clamped into the triangle) instead of re-intersecting the double ray: the point
   // is the same within float rounding, t is Embree's. Analytic shapes: the same record.
-  std::optional<SurfacePoint> intersect_point(const Ray& ray, double tmax = kInfinity) const;
+  // Returns whether there is a hit, written field by field into *out: the path tracer keeps one
+  // record per path (an optional built per query is zero-filled with `rep stosq`, a copied record
+  // read back over narrower stores stalls store forwarding; both showed in profiles).
+  bool intersect_point(const Ray& ray, SurfacePoint* out, double tmax = kInfinity) const;
   // Any hit with ray.t_min < t < min(ray.t_max, tmax) (rtcOccluded1). Shadow rays from
   // spawn_ray_to carry t_max = 1 - kShadowEpsilon already.
   bool occluded(const Ray& ray, double tmax = kInfinity) const;

@@ -61,24 +61,27 @@ inline void TriangleMesh::normals(uint32_t prim, const glm::uvec3& t, double b0,
   *n_out = n;
 }
 
-SurfacePoint TriangleMesh::point_at(uint32_t prim, const Vec2& uv, double t_hit) const {
+void TriangleMesh::point_into(uint32_t prim, const Vec2& uv, double t_hit, SurfacePoint* out) const {
   const glm::uvec3 t = tris_[prim];
   const Vec3 &p0 = pos_[t[0]], &p1 = pos_[t[1]], &p2 = pos_[t[2]];
   const double b1 = uv.x, b2 = uv.y, b0 = 1 - b1 - b2;
-  Vec3 ng, n;
-  normals(prim, t, b0, b1, b2, &ng, &n);
+  normals(prim, t, b0, b1, b2, &out->ng, &out->n);
   // Embree intersects in float: the bound covers its float arithmetic on coordinates of this
   // magnitude (pbrt-v3 Sec. 3.9.6 uses gamma_7 for its own float test; we allow more for
   // Embree's different formulation and for the float rounding of the ray origin).
   // Isotropic: Embree's plane and edge tests mix all coordinates, so a triangle lying in z = 0
   // still needs an offset in z.
   const Vec3 mag = abs_components(b0 * p0) + abs_components(b1 * p1) + abs_components(b2 * p2);
-  const Vec3 p_error(gamma_f(32) * max_component(mag));
-  return SurfacePoint{position(t, b0, b1, b2), ng, n, uv, 0u, prim, t_hit, p_error};
+  out->p_error = Vec3(gamma_f(32) * max_component(mag));
+  out->p = position(t, b0, b1, b2);
+  out->uv = uv;
+  out->shape_id = 0u;
+  out->prim_id = prim;
+  out->t = t_hit;
 }
 
 void TriangleMesh::surface_at(uint32_t prim, const Vec2& uv, Hit* out) const {
-  static_cast<SurfacePoint&>(*out) = point_at(prim, uv, 0.0);
+  point_into(prim, uv, 0.0, out);
   const glm::uvec3 t = tris_[prim];
   const Vec3 &p0 = pos_[t[0]], &p1 = pos_[t[1]], &p2 = pos_[t[2]];
   Hit& h = *out;
@@ -89,7 +92,7 @@ void TriangleMesh::surface_at(uint32_t prim, const Vec2& uv, Hit* out) const {
   if (!nrm_.empty()) {
     const double b1 = uv.x, b2 = uv.y, b0 = 1 - b1 - b2;
     const Vec3 &n0 = nrm_[t[0]], &n1 = nrm_[t[1]], &n2 = nrm_[t[2]];
-    const Vec3 a = b0 * n0 + b1 * n1 + b2 * n2;  // as in point_at, so n below is h.n up to flip_
+    const Vec3 a = b0 * n0 + b1 * n1 + b2 * n2;  // as in point_into, so n below is h.n up to flip_
     const double len = glm::length(a);
     if (len > 0) {
       const Vec3 n = a / len;
@@ -197,7 +200,7 @@ TriangleMesh::PositionNormal TriangleMesh::sample_position(const Vec2& u) const 
   Vec2 uv;
   const uint32_t prim = sample_uv(u, &uv);
   const glm::uvec3 t = tris_[prim];
-  const double b1 = uv.x, b2 = uv.y, b0 = 1 - b1 - b2;  // as in point_at
+  const double b1 = uv.x, b2 = uv.y, b0 = 1 - b1 - b2;  // as in point_into
   Vec3 ng, n;
   normals(prim, t, b0, b1, b2, &ng, &n);  // ng unused: its side test is dead code here
   return {position(t, b0, b1, b2), n};
@@ -207,7 +210,9 @@ SurfacePoint TriangleMesh::sample_point(const Vec2& u, double* pdf_area) const {
   Vec2 uv;
   const uint32_t prim = sample_uv(u, &uv);
   *pdf_area = 1.0 / total_area_;
-  return point_at(prim, uv, 0.0);
+  SurfacePoint p;
+  point_into(prim, uv, 0.0, &p);
+  return p;
 }
 
 }  // namespace tb

@@ -47,10 +47,10 @@ class PathTracer {
     bool count_emission_fully = true;  // camera ray, or the last bounce was a delta lobe
     double prev_pdf_bsdf = 0.0;        // solid angle, of the last BSDF sample
     Vec3 prev_p(0.0);                  // the vertex the ray left
+    SurfacePoint hit;                  // the current vertex (one record per path, see intersect_point)
     for (int depth = 0;; ++depth) {
       ++counts.extension;
-      const std::optional<SurfacePoint> hit = scene.intersect_point(ray);
-      if (!hit) {
+      if (!scene.intersect_point(ray, &hit)) {
         for (const Light* env : world_.infinite_lights()) {
           const Rgb le = env->le(Vec3(0.0), ray.d);
           if (is_black(le)) continue;
@@ -58,15 +58,15 @@ class PathTracer {
         }
         break;
       }
-      const SurfaceInfo& surf = world_.surface(hit->shape_id);
+      const SurfaceInfo& surf = world_.surface(hit.shape_id);
       const Vec3 wo = -ray.d;
       if (surf.emitter) {
-        const Rgb le = surf.emitter->le(hit->n, wo);
+        const Rgb le = surf.emitter->le(hit.n, wo);
         if (!is_black(le))
-          L += beta * le * emission_weight(count_emission_fully, prev_pdf_bsdf, surf.emitter, prev_p, ray.d, &*hit);
+          L += beta * le * emission_weight(count_emission_fully, prev_pdf_bsdf, surf.emitter, prev_p, ray.d, &hit);
       }
       if (!surf.bsdf || depth >= st_.max_depth) break;
-      const SurfaceScatter scatter(*hit, *surf.bsdf);
+      const SurfaceScatter scatter(hit, *surf.bsdf);
       const BounceUniforms u(rng);
 
       // Next-event estimation (Veach Eq. 9.12 with the light technique's weight).
@@ -79,8 +79,8 @@ class PathTracer {
       beta *= bs->weight;
       count_emission_fully = bs->is_delta();
       prev_pdf_bsdf = bs->pdf;
-      prev_p = hit->p;
-      ray = spawn_ray(*hit, bs->wi);
+      prev_p = hit.p;
+      ray = spawn_ray(hit, bs->wi);
 
       if (st_.russian_roulette && depth + 1 >= st_.rr_min_depth) {
         const double q = std::min(1.0, max_component(beta));
