@@ -4,6 +4,8 @@
 //    uniform on the sphere (so that, as for path-traced rays, most of them hit a wall),
 //    rtcIntersect1 / rtcOccluded1 with nothing around them;
 //    1 and 2 threads (TBB, a fixed batch of 2^18 rays per iteration). Counter rays/s.
+//  - BM_RawIntersectStream / BM_RawOccludedStream: the same rays as rtcIntersect1M /
+//    rtcOccluded1M streams of 1024 (what a wavefront tracer could use; for comparison only).
 //  - BM_PathTracerSegments: the path tracer on the same scene at its 256 x 256 resolution,
 //    4 spp per iteration, 1 and 2 threads; segments/s counts every ray it casts (camera rays,
 //    extensions, shadow rays), samples/s the camera samples.
@@ -89,65 +91,72 @@ const std::vector<RTCRay>& raw_rays() {
   return rays;
 }
 
-// Traces the 2^18 raw rays once (in parallel, blocks of 1024 rays: enough work per task that
-// scheduling is negligible); returns the number of hits.
-template <bool kOccluded>
-int64_t trace_raw_rays() {
-  const RTCScene rtc = static_cast<RTCScene>(scene("cornell-box.json").geometry().embree_scene());
-  const std::vector<RTCRay>& rays = raw_rays();
+// Traces the 2^18 raw rays once, in parallel over blocks of 1024 rays (enough work per task that
+// scheduling is negligible): trace_block(first, ctx) traces rays [first, first + 1024) and returns
+// its hits. Returns the number of hits.
+template <class TraceBlock>
+int64_t count_raw_hits(RTCIntersectContextFlags flags, TraceBlock&& trace_block) {
   std::atomic<int64_t> hits{0};
-  parallel_for(rays.size() / 1024, [&](size_t block) {
+  parallel_for(raw_rays().size() / 1024, [&](size_t block) {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
+    ctx.flags = flags;
+    hits.fetch_add(trace_block(block * 1024, &ctx), std::memory_order_relaxed);
+  });
+  return hits.load();
+}
+
+RTCScene raw_scene() { return static_cast<RTCScene>(scene("cornell-box.json").geometry().embree_scene()); }
+
+// One query per ray (rtcIntersect1 / rtcOccluded1).
+template <bool kOccluded>
+int64_t trace_raw_rays() {
+  const std::vector<RTCRay>& rays = raw_rays();
+  const RTCScene rtc = raw_scene();  // looked up once, outside the timed queries
+  return count_raw_hits(RTC_INTERSECT_CONTEXT_FLAG_NONE, [&](size_t first, RTCIntersectContext* ctx) {
     int64_t h = 0;
-    for (size_t i = block * 1024, end = i + 1024; i < end; ++i) {
+    for (size_t i = first; i < first + 1024; ++i) {
       if constexpr (kOccluded) {
         RTCRay r = rays[i];
-        rtcOccluded1(rtc, &ctx, &r);
+        rtcOccluded1(rtc, ctx, &r);
         h += r.tfar < 0;
       } else {
         RTCRayHit rh;
         rh.ray = rays[i];
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(rtc, &ctx, &rh);
+        rtcIntersect1(rtc, ctx, &rh);
         h += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
       }
     }
-    hits.fetch_add(h, std::memory_order_relaxed);
+    return h;
   });
-  return hits.load();
 }
 
 // The same rays as streams of 1024 (rtcIntersect1M / rtcOccluded1M, incoherent flag): Embree
 // regroups them into packets for its SIMD traversal.
 template <bool kOccluded>
 int64_t trace_raw_streams() {
-  const RTCScene rtc = static_cast<RTCScene>(scene("cornell-box.json").geometry().embree_scene());
   const std::vector<RTCRay>& rays = raw_rays();
-  std::atomic<int64_t> hits{0};
-  parallel_for(rays.size() / 1024, [&](size_t block) {
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+  const RTCScene rtc = raw_scene();  // looked up once, outside the timed queries
+  return count_raw_hits(RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT, [&](size_t first, RTCIntersectContext* ctx) {
     int64_t h = 0;
     if constexpr (kOccluded) {
-      std::vector<RTCRay> r(rays.begin() + block * 1024, rays.begin() + (block + 1) * 1024);
-      rtcOccluded1M(rtc, &ctx, r.data(), 1024, sizeof(RTCRay));
+      std::vector<RTCRay> r(rays.begin() + first, rays.begin() + first + 1024);
+      rtcOccluded1M(rtc, ctx, r.data(), 1024, sizeof(RTCRay));
       for (const RTCRay& x : r) h += x.tfar < 0;
     } else {
       std::vector<RTCRayHit> rh(1024);
       for (size_t i = 0; i < 1024; ++i) {
-        rh[i].ray = rays[block * 1024 + i];
+        rh[i].ray = rays[first + i];
         rh[i].hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rh[i].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
       }
-      rtcIntersect1M(rtc, &ctx, rh.data(), 1024, sizeof(RTCRayHit));
+      rtcIntersect1M(rtc, ctx, rh.data(), 1024, sizeof(RTCRayHit));
       for (const RTCRayHit& x : rh) h += x.hit.geomID != RTC_INVALID_GEOMETRY_ID;
     }
-    hits.fetch_add(h, std::memory_order_relaxed);
+    return h;
   });
-  return hits.load();
 }
 
 template <bool kOccluded>
