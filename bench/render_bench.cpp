@@ -7,7 +7,8 @@
 //  - BM_RawIntersectStream / BM_RawOccludedStream: the same rays as rtcIntersect1M /
 //    rtcOccluded1M streams of 1024 (what a wavefront tracer could use; for comparison only).
 //  - BM_PathTracerSegments: the path tracer on the same scene at its 256 x 256 resolution,
-//    4 spp per iteration, 1 and 2 threads; segments/s counts every ray it casts (camera rays,
+//    one pass of 1 or 4 spp per iteration (the film's per-pass work shows in the difference),
+//    1 and 2 threads; segments/s counts every ray it casts (camera rays,
 //    extensions, shadow rays), samples/s the camera samples.
 //  - BM_PathTracerToRawRatio: the two alternately in each iteration (same load for both), the
 //    ratio PT segments/s : raw rtcIntersect1 rays/s directly.
@@ -205,7 +206,7 @@ RenderSettings one_pass(const World& w, int64_t spp) {
 void BM_PathTracerSegments(benchmark::State& state) {
   const World& w = scene("cornell-box.json");
   ThreadLimit limit(static_cast<size_t>(state.range(0)));
-  RenderSettings st = one_pass(w, 4);
+  RenderSettings st = one_pass(w, state.range(1));
   RayCounts counts;
   uint64_t seed = 1;
   // One film for the run, as `tb render` keeps one over its passes (a new film per iteration
@@ -224,7 +225,11 @@ void BM_PathTracerSegments(benchmark::State& state) {
   state.counters["samples/s"] = benchmark::Counter(
       double(state.iterations()) * double(w.camera().pixel_count() * st.spp), benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_PathTracerSegments)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PathTracerSegments)
+    ->ArgsProduct({{1, 2}, {1, 4}})
+    ->ArgNames({"threads", "spp_per_pass"})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 
 // PT segments/s over raw rtcIntersect1 rays/s measured alternately, a raw batch then a PT pass
 // (256 x 256, 1 spp) per iteration, so that both see the same load on a shared machine.

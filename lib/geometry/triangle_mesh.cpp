@@ -35,6 +35,13 @@ TriangleMesh::TriangleMesh(std::vector<Vec3> positions, std::vector<glm::uvec3> 
     sum += triangle_area(i);
     cdf_.push_back(sum.value());
   }
+  // 1 / (width of triangle i in the cdf): sample_uv re-uses u.x with a multiplication (a division
+  // on the light-sampling chain of every next-event estimate otherwise). Zero for a zero width.
+  inv_width_.reserve(tris_.size());
+  for (size_t i = 0; i < cdf_.size(); ++i) {
+    const double width = cdf_[i] - (i == 0 ? 0.0 : cdf_[i - 1]);
+    inv_width_.push_back(width > 0 ? 1.0 / width : 0.0);
+  }
   total_area_ = sum.value();
   if (!(total_area_ > 0)) throw std::invalid_argument("TriangleMesh: zero area");
 }
@@ -42,23 +49,6 @@ TriangleMesh::TriangleMesh(std::vector<Vec3> positions, std::vector<glm::uvec3> 
 double TriangleMesh::triangle_area(uint32_t prim) const {
   const glm::uvec3 t = tris_[prim];
   return 0.5 * glm::length(glm::cross(pos_[t[1]] - pos_[t[0]], pos_[t[2]] - pos_[t[0]]));
-}
-
-inline void TriangleMesh::normals(uint32_t prim, const glm::uvec3& t, double b0, double b1, double b2, Vec3* ng_out,
-                                  Vec3* n_out) const {
-  Vec3 ng = frames_[prim].ng, n = ng;
-  if (!nrm_.empty()) {
-    const Vec3 a = b0 * nrm_[t[0]] + b1 * nrm_[t[1]] + b2 * nrm_[t[2]];
-    const double len = glm::length(a);
-    if (len > 0) n = a / len;
-    if (glm::dot(ng, n) < 0) ng = -ng;  // geometric normal on the side of the shading normal
-  }
-  if (flip_) {
-    n = -n;
-    ng = -ng;
-  }
-  *ng_out = ng;
-  *n_out = n;
 }
 
 void TriangleMesh::point_into(uint32_t prim, const Vec2& uv, double t_hit, SurfacePoint* out) const {
@@ -160,50 +150,11 @@ AreaSample TriangleMesh::sample_area(const Vec2& u) const {
   return a;
 }
 
-namespace {
-
-// std::upper_bound(cdf.begin(), cdf.end(), x) - cdf.begin() for a sorted cdf, with a loop whose
-// trip count depends only on the size and a conditional move inside: for random x the branches of
-// std::upper_bound are mispredicted about half the time.
-size_t upper_bound_branchless(const std::vector<double>& cdf, double x) {
-  size_t base = 0, len = cdf.size();
-  while (len > 1) {
-    const size_t half = len / 2;
-    base = cdf[base + half - 1] <= x ? base + half : base;  // first half entirely <= x
-    len -= half;
-  }
-  return base + (cdf[base] <= x ? 1 : 0);
-}
-
-}  // namespace
-
-inline uint32_t TriangleMesh::sample_uv(const Vec2& u, Vec2* uv) const {
-  const double target = u.x * total_area_;
-  const size_t i = upper_bound_branchless(cdf_, target);
-  const uint32_t prim = static_cast<uint32_t>(std::min(i, cdf_.size() - 1));
-  const double lo = select_bits(prim == 0, 0.0, cdf_[prim == 0 ? 0 : prim - 1]);  // no jump on prim
-  const double width = cdf_[prim] - lo;
-  const double s = width > 0 ? std::clamp((target - lo) / width, 0.0, 1.0) : 0.0;  // re-used uniform
-  const double su = std::sqrt(s);
-  *uv = {su * (1 - u.y), su * u.y};
-  return prim;
-}
-
 double TriangleMesh::sample_area(const Vec2& u, Hit* h) const {
   Vec2 uv;
   const uint32_t prim = sample_uv(u, &uv);
   surface_at(prim, uv, h);
   return 1.0 / total_area_;
-}
-
-TriangleMesh::PositionNormal TriangleMesh::sample_position(const Vec2& u) const {
-  Vec2 uv;
-  const uint32_t prim = sample_uv(u, &uv);
-  const glm::uvec3 t = tris_[prim];
-  const double b1 = uv.x, b2 = uv.y, b0 = 1 - b1 - b2;  // as in point_into
-  Vec3 ng, n;
-  normals(prim, t, b0, b1, b2, &ng, &n);  // ng unused: its side test is dead code here
-  return {position(t, b0, b1, b2), n};
 }
 
 SurfacePoint TriangleMesh::sample_point(const Vec2& u, double* pdf_area) const {

@@ -9,12 +9,15 @@
 // (texcoord()), not the parameterisation.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <vector>
 
 #include <glm/glm.hpp>
 
+#include "lib/core/math.h"
 #include "lib/geometry/area_sample.h"
 #include "lib/geometry/bounds.h"
 #include "lib/geometry/hit.h"
@@ -70,6 +73,8 @@ class TriangleMesh {
   struct PositionNormal {
     Vec3 p, n;
   };
+  // Inline (below): the light-sampling chain of every next-event estimate runs through it, and a
+  // record returned across translation units is read back through the stack.
   PositionNormal sample_position(const Vec2& u) const;
   double pdf_area() const { return 1.0 / total_area_; }
 
@@ -99,9 +104,67 @@ class TriangleMesh {
   // Triangle and barycentrics of an area sample (inlined: a few dozen instructions, called once per
   // light sample).
   [[gnu::always_inline]] uint32_t sample_uv(const Vec2& u, Vec2* uv) const;
-  std::vector<double> cdf_;  // cumulative triangle areas, cdf_.back() == total_area_
+  std::vector<double> cdf_;        // cumulative triangle areas, cdf_.back() == total_area_
+  std::vector<double> inv_width_;  // 1 / (cdf_[i] - cdf_[i - 1]), 0 for a zero-area triangle
   double total_area_ = 0;
   bool flip_;
 };
+
+namespace detail {
+
+// std::upper_bound(cdf.begin(), cdf.end(), x) - cdf.begin() for a sorted cdf, with a loop whose
+// trip count depends only on the size and a conditional move inside: for random x the branches of
+// std::upper_bound are mispredicted about half the time.
+inline size_t upper_bound_branchless(const std::vector<double>& cdf, double x) {
+  size_t base = 0, len = cdf.size();
+  while (len > 1) {
+    const size_t half = len / 2;
+    base = cdf[base + half - 1] <= x ? base + half : base;  // first half entirely <= x
+    len -= half;
+  }
+  return base + (cdf[base] <= x ? 1 : 0);
+}
+
+}  // namespace detail
+
+inline void TriangleMesh::normals(uint32_t prim, const glm::uvec3& t, double b0, double b1, double b2, Vec3* ng_out,
+                                  Vec3* n_out) const {
+  Vec3 ng = frames_[prim].ng, n = ng;
+  if (!nrm_.empty()) {
+    const Vec3 a = b0 * nrm_[t[0]] + b1 * nrm_[t[1]] + b2 * nrm_[t[2]];
+    const double len = glm::length(a);
+    if (len > 0) n = a / len;
+    if (glm::dot(ng, n) < 0) ng = -ng;  // geometric normal on the side of the shading normal
+  }
+  if (flip_) {
+    n = -n;
+    ng = -ng;
+  }
+  *ng_out = ng;
+  *n_out = n;
+}
+
+inline uint32_t TriangleMesh::sample_uv(const Vec2& u, Vec2* uv) const {
+  const double target = u.x * total_area_;
+  const size_t i = detail::upper_bound_branchless(cdf_, target);
+  const uint32_t prim = static_cast<uint32_t>(std::min(i, cdf_.size() - 1));
+  const double lo = select_bits(prim == 0, 0.0, cdf_[prim == 0 ? 0 : prim - 1]);  // no jump on prim
+  // The re-used uniform (target - lo) / width, as a product with the stored reciprocal (within an
+  // ulp of the quotient; 0 for a zero-width triangle, as before).
+  const double s = std::clamp((target - lo) * inv_width_[prim], 0.0, 1.0);
+  const double su = std::sqrt(s);
+  *uv = {su * (1 - u.y), su * u.y};
+  return prim;
+}
+
+inline TriangleMesh::PositionNormal TriangleMesh::sample_position(const Vec2& u) const {
+  Vec2 uv;
+  const uint32_t prim = sample_uv(u, &uv);
+  const glm::uvec3 t = tris_[prim];
+  const double b1 = uv.x, b2 = uv.y, b0 = 1 - b1 - b2;  // as in point_into
+  Vec3 ng, n;
+  normals(prim, t, b0, b1, b2, &ng, &n);  // ng unused: its side test is dead code here
+  return {position(t, b0, b1, b2), n};
+}
 
 }  // namespace tb

@@ -109,7 +109,8 @@ class PathTracer {
     const SurfacePoint& hit = scatter.hit();
     const auto ls = choice->light->sample_li_point(hit.p, {u[BounceDim::kLightU], u[BounceDim::kLightV]});
     if (!ls || !(ls->pdf > 0) || is_black(ls->li)) return Rgb(0.0);
-    const Rgb f = scatter.f(wo, ls->wi, TransportMode::kRadiance);
+    double pdf_bsdf = 0.0;  // the BSDF technique's density of ls->wi, for the MIS weight
+    const Rgb f = scatter.f_pdf(wo, ls->wi, TransportMode::kRadiance, &pdf_bsdf);
     if (is_black(f)) return Rgb(0.0);
     const double cos_i = st_.fault == IntegratorFault::kNeeNoCosine ? 1.0 : scatter.abs_cos_shading(ls->wi);
     ++counts.shadow;
@@ -117,9 +118,7 @@ class PathTracer {
                                                   : world_.geometry().occluded(spawn_ray_to(hit, ls->p_light));
     if (blocked) return Rgb(0.0);
     const double pdf_light = choice->pmf * ls->pdf;
-    const double w = choice->light->is_delta()
-                         ? 1.0
-                         : mis2(pdf_light, scatter.pdf(wo, ls->wi, TransportMode::kRadiance));
+    const double w = choice->light->is_delta() ? 1.0 : mis2(pdf_light, pdf_bsdf);
     return f * ls->li * (cos_i * w / pdf_light);
   }
 

@@ -28,11 +28,13 @@ std::optional<LightLiPoint> AreaLight::li_from(const Vec3& ref, const Vec3& p, c
   const double dist2 = glm::dot(d, d);
   const double dist = std::sqrt(dist2);
   const Vec3 wi = d * (1.0 / dist);  // one division instead of three (within an ulp of d / dist)
-  const double cos_light = std::abs(glm::dot(n, wi));
-  if (!(pdf_area > 0) || !(dist2 > 0) || !(cos_light > 0)) return std::nullopt;
+  // Area -> solid angle at ref: pdf_A dist^2 / |cos_light| with |cos_light| = |n.d| / dist, written
+  // pdf_A dist^3 / |n.d| so that this division waits only for the square root, not for 1 / dist
+  // (the two divisions overlap: this chain precedes every shadow ray).
+  const double n_dot_d = std::abs(glm::dot(n, d));
+  if (!(pdf_area > 0) || !(dist2 > 0) || !(n_dot_d > 0)) return std::nullopt;
   // A prvalue built in place from every field: no zero-filled record, no copy.
-  return std::optional<LightLiPoint>(std::in_place, wi, le(n, -wi),
-                                     pdf_area * dist2 / cos_light /* area -> solid angle at ref */, p, n, dist,
+  return std::optional<LightLiPoint>(std::in_place, wi, le(n, -wi), pdf_area * dist2 * dist / n_dot_d, p, n, dist,
                                      pdf_area);
 }
 

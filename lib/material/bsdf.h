@@ -67,6 +67,13 @@ class Bsdf {
   // Density of sample() producing wi, in solid angle of wi (zero on delta lobes). Integrates to
   // the probability that sample() succeeds with a non-delta lobe (at most 1).
   virtual double pdf(const Vec3& wo, const Vec3& wi, TransportMode mode) const = 0;
+  // eval() and pdf() of the same pair in one call (next-event estimation needs both): *pdf =
+  // pdf(wo, wi, mode), returns eval(wo, wi, mode), bit for bit. Overridden where one call is
+  // cheaper than two virtual calls.
+  virtual Rgb eval_pdf(const Vec3& wo, const Vec3& wi, TransportMode mode, double* pdf) const {
+    *pdf = this->pdf(wo, wi, mode);
+    return eval(wo, wi, mode);
+  }
 
   // Beckmann-equivalent roughness alpha (Kaplanyan et al. 2014, Sec. 6): 0 for delta BSDFs,
   // +inf for diffuse ones.

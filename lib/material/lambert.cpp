@@ -31,6 +31,15 @@ std::optional<BsdfSample> LambertBsdf::sample(const Vec3& wo, double, const Vec2
                                    std::abs(wi.z) * kInvPi, bsdf_flags::kReflection | bsdf_flags::kDiffuse, 1.0);
 }
 
+Rgb LambertBsdf::eval_pdf(const Vec3& wo, const Vec3& wi, TransportMode, double* pdf) const {
+  if (wo.z * wi.z <= 0) {
+    *pdf = 0.0;
+    return Rgb(0.0);
+  }
+  *pdf = std::abs(wi.z) * kInvPi;
+  return r_ * kInvPi;
+}
+
 double LambertBsdf::pdf(const Vec3& wo, const Vec3& wi, TransportMode) const {
   if (wo.z * wi.z <= 0) return 0.0;
   return std::abs(wi.z) * kInvPi;

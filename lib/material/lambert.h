@@ -15,6 +15,7 @@ class LambertBsdf final : public Bsdf {
   // 1997); pdf = |cos theta_i| / pi in solid angle.
   std::optional<BsdfSample> sample(const Vec3& wo, double uc, const Vec2& u, TransportMode mode) const override;
   double pdf(const Vec3& wo, const Vec3& wi, TransportMode mode) const override;
+  Rgb eval_pdf(const Vec3& wo, const Vec3& wi, TransportMode mode, double* pdf) const override;
   double beckmann_roughness() const override { return kInfinity; }
   const Rgb& reflectance() const { return r_; }
 

@@ -29,6 +29,13 @@ Rgb SurfaceScatter::f(const Vec3& wo, const Vec3& wi, TransportMode mode) const 
   return bsdf_->eval(fr.to_local(wo), fr.to_local(wi), mode) * correction(wo, wi, mode);
 }
 
+Rgb SurfaceScatter::f_pdf(const Vec3& wo, const Vec3& wi, TransportMode mode, double* pdf) const {
+  const Frame& fr = frame_for(wo);
+  const Rgb f = bsdf_->eval_pdf(fr.to_local(wo), fr.to_local(wi), mode, pdf);
+  if (!sides_ok(wo, wi)) return Rgb(0.0);
+  return f * correction(wo, wi, mode);
+}
+
 double SurfaceScatter::pdf(const Vec3& wo, const Vec3& wi, TransportMode mode) const {
   const Frame& fr = frame_for(wo);
   return bsdf_->pdf(fr.to_local(wo), fr.to_local(wi), mode);

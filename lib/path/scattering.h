@@ -35,6 +35,8 @@ class SurfaceScatter {
 
   Rgb f(const Vec3& wo, const Vec3& wi, TransportMode mode) const;
   double pdf(const Vec3& wo, const Vec3& wi, TransportMode mode) const;
+  // f(wo, wi, mode), with *pdf = pdf(wo, wi, mode): one frame look-up and one BSDF call.
+  Rgb f_pdf(const Vec3& wo, const Vec3& wi, TransportMode mode, double* pdf) const;
   std::optional<WorldBsdfSample> sample(const Vec3& wo, double uc, const Vec2& u, TransportMode mode) const;
 
   // |w . n| with the shading normal.

@@ -90,6 +90,23 @@ TEST_P(BsdfTest, SampleAgreesWithEvalAndPdf) {
   EXPECT_GT(produced, 1000);  // two modes x 4000 tries; grazing and rough configurations fail often
 }
 
+// eval_pdf (one call, used by next-event estimation) returns exactly eval and pdf: an override
+// that drifted from either would bias NEE or its MIS weight without failing the tests above.
+TEST_P(BsdfTest, EvalPdfEqualsSeparateCalls) {
+  Rng rng(hash_string(GetParam().label()) + 2);
+  for (int k = 0; k < 4000; ++k) {
+    const Vec3 wo = random_dir(rng), wi = random_dir(rng);
+    for (TransportMode mode : {TransportMode::kRadiance, TransportMode::kImportance}) {
+      double pdf = -1.0;
+      const Rgb f = bsdf->eval_pdf(wo, wi, mode, &pdf);
+      const Rgb f_ref = bsdf->eval(wo, wi, mode);
+      const std::string where = fmt::format("{} k={}", GetParam().label(), k);
+      ASSERT_EQ(pdf, bsdf->pdf(wo, wi, mode)) << where;
+      ASSERT_TRUE(f.r == f_ref.r && f.g == f_ref.g && f.b == f_ref.b) << where;
+    }
+  }
+}
+
 // Index of refraction of the medium a direction lies in (outside = 1).
 double medium_eta(const Bsdf& b, const Vec3& w) { return w.z > 0 ? 1.0 : b.eta(); }
 
