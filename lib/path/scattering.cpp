@@ -46,7 +46,9 @@ std::optional<WorldBsdfSample> SurfaceScatter::sample(const Vec3& wo, double uc,
   const Frame& fr = frame_for(wo);
   const auto bs = bsdf_->sample(fr.to_local(wo), uc, u, mode);
   if (!bs || !(bs->pdf > 0)) return std::nullopt;
-  const Vec3 wi = glm::normalize(fr.to_world(bs->wi));
+  // The frame is orthonormal and bs->wi a unit vector, so wi is unit to a few ulps: no
+  // normalisation (its square root and division sat on the chain to the next ray).
+  const Vec3 wi = fr.to_world(bs->wi);
   // Returned as prvalues built in place from every field (see LambertBsdf::sample for why).
   if (!sides_ok(wo, wi)) return std::optional<WorldBsdfSample>(std::in_place, wi, Rgb(0.0), Rgb(0.0), bs->pdf, bs->flags);
   const double c = correction(wo, wi, mode);
