@@ -68,6 +68,16 @@ inline Ray spawn_ray(const SurfacePoint& h, const Vec3& w) {
   return r;
 }
 
+// spawn_ray(h, w) written into *r field by field: a loop's ray variable assigned a returned Ray
+// was copied with 16-byte loads over the 8-byte stores that built the temporary (store-forwarding
+// stalls on every bounce of the path tracer).
+inline void spawn_ray_into(const SurfacePoint& h, const Vec3& w, Ray* r) {
+  r->o = offset_ray_origin(h.p, h.p_error, h.ng, w);
+  r->d = w;
+  r->t_min = 0.0;
+  r->t_max = kInfinity;
+}
+
 // A shadow ray from `h` towards the point p2: the target is at t = 1 and t_max is
 // 1 - kShadowEpsilon, so Scene::occluded(ray) tests the open segment.
 inline Ray spawn_ray_to(const SurfacePoint& h, const Vec3& p2) {

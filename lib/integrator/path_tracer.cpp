@@ -80,7 +80,7 @@ class PathTracer {
       count_emission_fully = bs->is_delta();
       prev_pdf_bsdf = bs->pdf;
       prev_p = hit.p;
-      ray = spawn_ray(hit, bs->wi);
+      spawn_ray_into(hit, bs->wi, &ray);
 
       if (st_.russian_roulette && depth + 1 >= st_.rr_min_depth) {
         const double q = std::min(1.0, max_component(beta));

@@ -41,19 +41,4 @@ double SurfaceScatter::pdf(const Vec3& wo, const Vec3& wi, TransportMode mode) c
   return bsdf_->pdf(fr.to_local(wo), fr.to_local(wi), mode);
 }
 
-std::optional<WorldBsdfSample> SurfaceScatter::sample(const Vec3& wo, double uc, const Vec2& u,
-                                                      TransportMode mode) const {
-  const Frame& fr = frame_for(wo);
-  const auto bs = bsdf_->sample(fr.to_local(wo), uc, u, mode);
-  if (!bs || !(bs->pdf > 0)) return std::nullopt;
-  // The frame is orthonormal and bs->wi a unit vector, so wi is unit to a few ulps: no
-  // normalisation (its square root and division sat on the chain to the next ray).
-  const Vec3 wi = fr.to_world(bs->wi);
-  // Returned as prvalues built in place from every field (see LambertBsdf::sample for why).
-  if (!sides_ok(wo, wi)) return std::optional<WorldBsdfSample>(std::in_place, wi, Rgb(0.0), Rgb(0.0), bs->pdf, bs->flags);
-  const double c = correction(wo, wi, mode);
-  // bs->weight = f |cos wi| / pdf with the (possibly flipped) shading normal
-  return std::optional<WorldBsdfSample>(std::in_place, wi, bs->f * c, bs->weight * c, bs->pdf, bs->flags);
-}
-
 }  // namespace tb
