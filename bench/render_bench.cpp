@@ -265,10 +265,12 @@ void integrator_bench(benchmark::State& state, const IntegratorInfo* integ, cons
   const World& w = scene(file, 512);
   RenderSettings st = one_pass(w, 1);
   uint64_t seed = 1;
+  // One film for the run, as in BM_PathTracerSegments: a new 512 x 512 film per iteration timed
+  // its allocation and first-touch page faults, serial work that is not the integrator's.
+  Film film(w.camera().width(), w.camera().height());
   const double cpu0 = process_cpu_seconds();
   for (auto _ : state) {
     st.seed = seed++;
-    Film film(w.camera().width(), w.camera().height());
     integ->render(w, st, film);
   }
   const double samples = double(state.iterations()) * double(w.camera().pixel_count());
