@@ -73,8 +73,9 @@ class TriangleMesh {
   struct PositionNormal {
     Vec3 p, n;
   };
-  // Inline (below): the light-sampling chain of every next-event estimate runs through it, and a
-  // record returned across translation units is read back through the stack.
+  // Defined inline below (the light-sampling chain of every next-event estimate runs through it);
+  // GCC may still keep it out of line: forcing it inline into AreaLight made no measurable
+  // difference.
   PositionNormal sample_position(const Vec2& u) const;
   double pdf_area() const { return 1.0 / total_area_; }
 
