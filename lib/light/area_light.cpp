@@ -28,7 +28,8 @@ std::optional<LightLiPoint> AreaLight::li_from(const Vec3& ref, const Vec3& p, c
   const double dist2 = glm::dot(d, d);
   const double dist = std::sqrt(dist2);
   const Vec3 wi = d * (1.0 / dist);  // one division instead of three (within an ulp of d / dist)
-  // Area -> solid angle at ref: pdf_A dist^2 / |cos_light| with |cos_light| = |n.d| / dist, written
+  // Area -> solid angle at ref (Veach 1997, Eq. 8.10; lib/path/measure.h): pdf_A dist^2 / |cos_light|
+  // with |cos_light| = |n.d| / dist, written
   // pdf_A dist^3 / |n.d| so that this division waits only for the square root, not for 1 / dist
   // (the two divisions overlap: this chain precedes every shadow ray).
   const double n_dot_d = std::abs(glm::dot(n, d));
