@@ -11,8 +11,9 @@
 namespace tb::mcmc {
 
 // min(1, num / den) with the conventions a proposal needs: nothing is accepted into a state of
-// zero target density (num = 0); a move out of a state the chain could not have proposed from or
-// that has zero density (den = 0, num > 0) is always accepted; NaN gives 0 (never silently 1).
+// zero target density (num = 0); a move out of a state of zero density (den = 0, num > 0: a chain
+// started where pi = 0) is always accepted; NaN gives 0 (never silently 1). A move whose stated
+// forward density is 0 never reaches this function: decide() (chain_step.h) reports it as an error.
 inline double acceptance_from(double num, double den) {
   if (!(num > 0.0)) return 0.0;
   if (!(den > 0.0)) return den == 0.0 ? 1.0 : 0.0;

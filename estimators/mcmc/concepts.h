@@ -15,6 +15,7 @@
 #include <optional>
 #include <utility>
 
+#include "estimators/mcmc/chain_step.h"
 #include "lib/core/uniforms.h"
 
 namespace tb::mcmc {
@@ -69,8 +70,9 @@ concept DimensionMatchingMap = requires(const G& g, const typename G::Low& x, co
 // A kernel seen through its moves, the form all detailed-balance checkers use. A Move records
 // everything the proposal drew (component, destination, auxiliary tries): move_density(x, m) is
 // the joint density of proposing m from x and acceptance(x, m) the probability of accepting it;
-// reverse(x, m) is the move that takes destination(m) back to x. Detailed balance (on the extended
-// space for multiple-try kernels) is
+// reverse(x, m) is the move that takes destination(m) back to x; move_terms(x, m) are the four
+// numbers of its Hastings ratio (chain_step.h), from which acceptance(x, m) = decide(move_terms).
+// Detailed balance (on the extended space for multiple-try kernels) is
 //   pi(x) move_density(x, m) acceptance(x, m) = pi(y) move_density(y, m') acceptance(y, m').
 template <class K>
 concept MoveKernel = requires(const K& k, const typename K::State& x, const typename K::Move& m, Uniforms& u) {
@@ -81,6 +83,7 @@ concept MoveKernel = requires(const K& k, const typename K::State& x, const type
   { k.destination(m) } -> std::convertible_to<typename K::State>;
   { k.reverse(x, m) } -> std::same_as<typename K::Move>;
   { k.move_density(x, m) } -> std::convertible_to<double>;
+  { k.move_terms(x, m) } -> std::convertible_to<MoveTerms>;
   { k.acceptance(x, m) } -> std::convertible_to<double>;
 };
 

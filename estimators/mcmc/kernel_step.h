@@ -1,10 +1,13 @@
-// One Metropolis-Hastings transition of any MoveKernel, and expected-value splatting: the
-// proposed and the current state both contribute, weighted by a and 1 - a (Veach 1997, Ch. 11, the
-// "expected values" optimisation): unbiased for E_pi[f], a Rao-Blackwellisation of splatting the next state.
+// One Metropolis-Hastings transition of any MoveKernel, run by the one step of chain_step.h, and
+// expected-value splatting: the proposed and the current state both contribute, weighted by a and
+// 1 - a (Veach 1997, Ch. 11, the "expected values" optimisation): unbiased for E_pi[f], a
+// Rao-Blackwellisation of splatting the next state.
 #pragma once
 
 #include <optional>
+#include <utility>
 
+#include "estimators/mcmc/chain_step.h"
 #include "estimators/mcmc/concepts.h"
 
 namespace tb::mcmc {
@@ -16,21 +19,72 @@ struct Transition {
   std::optional<State> proposed;  // destination of move
   double acceptance = 0.0;        // a(x -> y); 0 when the proposal failed
   bool accepted = false;
+  MoveStatus status = MoveStatus::kNoProposal;
   const State& next() const { return accepted ? *proposed : current; }
 };
 
-// Proposes from x, accepts with probability a(x -> y) using one more uniform.
+namespace detail {
+
+// Returns `first`, then continues with `rest`: the stream a kernel's sample_move would have read
+// had the step not taken its first uniform as the selection uniform.
+class PrependedUniforms final : public Uniforms {
+ public:
+  PrependedUniforms(double first, Uniforms& rest) : first_(first), rest_(&rest) {}
+  double next() override {
+    if (pending_) {
+      pending_ = false;
+      return first_;
+    }
+    return rest_->next();
+  }
+
+ private:
+  double first_;
+  Uniforms* rest_;
+  bool pending_ = true;
+};
+
+// A MoveKernel seen as a ScoredChain: one "component" (the kernel selects inside sample_move).
+template <MoveKernel K>
+struct KernelChain {
+  using State = typename K::State;
+  using Move = typename K::Move;
+  const K* kernel;
+  Transition<State, Move>* t;
+  double select_uniform = 0.0;
+  int select(double v) {
+    select_uniform = v;
+    return 0;
+  }
+  bool propose(int, Uniforms& u) {
+    PrependedUniforms pu(select_uniform, u);
+    t->move = kernel->sample_move(t->current, pu);
+    if (!t->move) return false;
+    t->proposed = kernel->destination(*t->move);
+    return true;
+  }
+  MoveTerms terms(int) const { return kernel->move_terms(t->current, *t->move); }
+  void accept() {}
+  void reject() {}
+};
+
+}  // namespace detail
+
+// Proposes from x, accepts with probability a(x -> y) using one more uniform (chain_step).
 template <MoveKernel K>
 Transition<typename K::State, typename K::Move> step(const K& kernel, const typename K::State& x, Uniforms& u) {
   Transition<typename K::State, typename K::Move> t;
   t.current = x;
-  t.move = kernel.sample_move(x, u);
-  if (t.move) {
-    t.proposed = kernel.destination(*t.move);
-    t.acceptance = kernel.acceptance(x, *t.move);
-  }
-  const double ua = u.next();  // always drawn: the number of uniforms per step does not depend on failure
-  t.accepted = t.move && ua < t.acceptance;
+  detail::KernelChain<K> chain{&kernel, &t};
+  const auto none = [](Which, double) {};
+  StepOutcome o;
+  if constexpr (requires { kernel.rule(); })
+    o = chain_step(chain, u, u, none, kernel.rule());  // the kernel's rule (negative controls swap it)
+  else
+    o = chain_step(chain, u, u, none);
+  t.acceptance = o.acceptance;
+  t.accepted = o.accepted;
+  t.status = o.status;
   return t;
 }
 

@@ -12,10 +12,23 @@
 #include <utility>
 
 #include "estimators/mcmc/acceptance.h"
+#include "estimators/mcmc/chain_step.h"
 #include "estimators/mcmc/concepts.h"
 #include "estimators/mcmc/proposal_mixture.h"
 
 namespace tb::mcmc {
+
+// The Hastings terms of a move x -> y by component k of a mixture, given pi(x) and pi(y):
+// {pi(x), c_k(x) T_k(x -> y), pi(y), c_k(y) T_k(y -> x)}. When pi(y) = 0 the move is rejected
+// whatever T, so the densities are not evaluated (forward stands at 1). Every kernel over a
+// ProposalMixture forms its terms here: MetropolisHastings below and the path-space MLT driver.
+template <ProposalMixture M>
+MoveTerms mixture_terms(const M& mix, int k, const typename M::State& x, const typename M::State& y, double pi_x,
+                        double pi_y) {
+  if (!(pi_y > 0.0)) return {pi_x, 1.0, pi_y, 0.0};
+  const double cx = mix.selection(k, x), cy = mix.selection(k, y);
+  return {pi_x, cx > 0.0 ? cx * mix.density(k, x, y) : 0.0, pi_y, cy > 0.0 ? cy * mix.density(k, y, x) : 0.0};
+}
 
 template <Target Tg, ProposalMixture M, class Rule = HastingsRatio>
   requires std::same_as<typename Tg::State, typename M::State>
@@ -41,10 +54,14 @@ class MetropolisHastings {
     const double c = mix_.selection(k, x);
     return c > 0.0 ? c * mix_.density(k, x, y) : 0.0;
   }
-  // a_k(x -> y) by the kernel's rule (HastingsRatio: Otsu et al., Sec. 3.2).
-  double acceptance(int k, const State& x, const State& y) const {
-    return rule_(target_.density(x), proposal_density(k, x, y), target_.density(y), proposal_density(k, y, x));
+  // The terms of the Hastings ratio of a move by component k (chain_step.h).
+  MoveTerms terms(int k, const State& x, const State& y) const {
+    return mixture_terms(mix_, k, x, y, target_.density(x), target_.density(y));
   }
+  // a_k(x -> y) by the kernel's rule (HastingsRatio: Otsu et al., Sec. 3.2), through decide() as
+  // every acceptance of the project.
+  double acceptance(int k, const State& x, const State& y) const { return decide(terms(k, x, y), rule_).acceptance; }
+  const Rule& rule() const { return rule_; }
 
   // ---- MoveKernel ------------------------------------------------------------------------------
   double target_density(const State& x) const { return target_.density(x); }
@@ -59,6 +76,7 @@ class MetropolisHastings {
   const State& destination(const Move& m) const { return m.y; }
   Move reverse(const State& x, const Move& m) const { return Move{m.component, x}; }
   double move_density(const State& x, const Move& m) const { return proposal_density(m.component, x, m.y); }
+  MoveTerms move_terms(const State& x, const Move& m) const { return terms(m.component, x, m.y); }
   double acceptance(const State& x, const Move& m) const { return acceptance(m.component, x, m.y); }
 
  private:

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "estimators/mcmc/acceptance.h"
+#include "estimators/mcmc/chain_step.h"
 #include "estimators/mcmc/concepts.h"
 
 namespace tb::mcmc {
@@ -97,13 +98,15 @@ class MultipleTry {
     return d;
   }
 
-  double acceptance(const State& x, const Move& m) const {
+  // The generalised ratio sum_j w(y_j, x) / sum_i w(x*_i, y) as Hastings terms (pi folded into w).
+  MoveTerms move_terms(const State& x, const Move& m) const {
     const State& y = destination(m);
     double num = 0.0, den = weight(x, y);
     for (const State& t : m.tries) num += weight(t, x);
     for (const State& r : m.refs) den += weight(r, y);
-    return acceptance_from(num, den);
+    return {1.0, den, 1.0, num};
   }
+  double acceptance(const State& x, const Move& m) const { return decide(move_terms(x, m)).acceptance; }
 
  private:
   Tg target_;

@@ -17,24 +17,44 @@
 
 namespace tb {
 
-// render_pass(pass, spp_pass) renders one pass into the film and returns the splat scale for
-// Film::end_pass (0 when the pass splats nothing). Returns the number of passes done.
-template <class RenderPass>
-int64_t run_passes(const RenderSettings& st, Film& film, RenderPass&& render_pass) {
-  const int64_t passes = std::max<int64_t>(1, st.passes);
-  const int64_t spp_pass = std::max<int64_t>(1, st.spp / passes);
+// The one pass loop of every integrator. A run is `total` passes (Welch samples: pt, lt, bdpt and
+// the PSS drivers make one film pass per pass; path-space MLT one per chain); this loop runs the
+// range [settings.first_pass, first_pass + pass_count) of them in batches of `batch` consecutive
+// passes, owning interrupt (checked before each batch), progress (after each batch, as the fraction
+// of the range done) and the time budget (stop after the batch during which it ran out).
+// body(first, n) renders and closes (Film::end_pass) passes first .. first + n - 1 in order.
+// Every pass is a pure function of (seed, pass index), so a film that receives a range [0, a) and
+// then [a, b) is bit-identical to one that receives [0, b): this is the unit of work handed to
+// another thread, process or machine. Returns the number of passes done.
+template <class Body>
+int64_t for_each_pass_batch(const RenderSettings& st, int64_t total, int64_t batch, Body&& body) {
+  const int64_t first = std::clamp<int64_t>(st.first_pass, 0, total);
+  const int64_t end = st.pass_count < 0 ? total : std::min(total, first + st.pass_count);
+  const int64_t range = std::max<int64_t>(0, end - first);
+  batch = std::max<int64_t>(1, batch);
   const auto t0 = std::chrono::steady_clock::now();
   int64_t done = 0;
-  for (int64_t pass = 0; pass < passes; ++pass) {
+  for (int64_t p = first; p < end; p += batch) {
     if (st.interrupted && st.interrupted->load()) break;
-    film.end_pass(render_pass(pass, spp_pass));
-    ++done;
-    st.progress(static_cast<double>(done) / static_cast<double>(passes));
+    const int64_t n = std::min(batch, end - p);
+    body(p, n);
+    done += n;
+    st.progress(static_cast<double>(done) / static_cast<double>(range));
     if (st.time_budget_s > 0 &&
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > st.time_budget_s)
       break;
   }
   return done;
+}
+
+// settings.passes passes of settings.spp / passes samples per pixel each: render_pass(pass,
+// spp_pass) renders one pass into the film and returns the splat scale for Film::end_pass (0 when
+// the pass splats nothing).
+template <class RenderPass>
+int64_t run_passes(const RenderSettings& st, Film& film, RenderPass&& render_pass) {
+  const int64_t passes = std::max<int64_t>(1, st.passes);
+  const int64_t spp_pass = std::max<int64_t>(1, st.spp / passes);
+  return for_each_pass_batch(st, passes, 1, [&](int64_t pass, int64_t) { film.end_pass(render_pass(pass, spp_pass)); });
 }
 
 // Calls sample(x, y, index, rng) for every pixel of the tile and each of the pass's samples.

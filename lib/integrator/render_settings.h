@@ -38,6 +38,10 @@ struct RenderSettings {
   int max_depth = 10;        // maximum number of scattering events (path length in segments - 1)
   uint64_t seed = 1;
   double time_budget_s = 0;  // > 0: stop after the pass during which the budget ran out
+  // The range of passes (MLT: chains) this call renders: [first_pass, first_pass + pass_count),
+  // pass_count < 0: to the last. Results do not depend on how a run is cut into ranges.
+  int64_t first_pass = 0;
+  int64_t pass_count = -1;
   bool russian_roulette = true;
   int rr_min_depth = 3;      // roulette starts after this many scattering events
   // Restrict bidirectional estimators to one path length (segments) / one technique (s, t):

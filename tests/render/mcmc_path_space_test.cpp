@@ -28,9 +28,9 @@
 #include "lib/integrator/bdpt.h"
 #include "lib/mcmc/path_space/caustic_perturbation.h"
 #include "lib/mcmc/path_space/mlt.h"
-#include "lib/mcmc/path_space/net_flux.h"
-#include "lib/mcmc/path_space/proposal_projections.h"
-#include "lib/mcmc/path_space/reference_density.h"
+#include "validate/mcmc/path_space/net_flux.h"
+#include "validate/mcmc/path_space/proposal_projections.h"
+#include "validate/mcmc/path_space/reference_density.h"
 #include "lib/mcmc/path_space/start_paths.h"
 #include "lib/mcmc/path_space/subpath_step.h"
 #include "lib/path/dirac.h"
@@ -39,6 +39,7 @@
 #include "validate/chi2/sampler_chi2.h"
 #include "validate/mcmc/broken_variants.h"
 #include "validate/mcmc/pairwise_balance.h"
+#include "validate/render/broken_path_mutations.h"
 #include "validate/render/render_compare.h"
 #include "validate/stats/tests.h"
 #include "validate/stats/welford.h"
@@ -71,6 +72,24 @@ std::function<MltPath(Uniforms&)> start_sampler(const PathContext& ctx, int min_
     auto x = sample_bdpt_path(ctx, u, kMaxDepth, min_segments);
     return x ? *x : MltPath{};
   };
+}
+
+PathMutationSettings settings() {
+  PathMutationSettings s;
+  s.max_segments = kMaxDepth + 1;
+  return s;
+}
+PathMutationList registered(const PathContext& ctx) { return make_path_mutations(ctx, settings()); }
+// Reference density of component j of a mixture of registered mutations.
+auto reference_of(const PathMixture& mix, const PathContext& ctx) {
+  std::vector<std::function<double(const MltPath&, const MltPath&)>> refs;
+  for (int j = 0; j < mix.components(); ++j) refs.push_back(reference_density_of(mix.component(j), ctx));
+  return [refs](int j, const MltPath& x, const MltPath& y) { return refs[static_cast<size_t>(j)](x, y); };
+}
+// The registered lens perturbation with its T ratio dropped (broken_path_mutations.h).
+std::shared_ptr<const PathMutation> broken_lens(const PathContext& ctx) {
+  return std::make_shared<const LensWithoutDensityRatio>(
+      std::make_shared<const PathProposalMutation<LensPerturbation>>("lens", 1.0, LensPerturbation(ctx)));
 }
 
 template <class Mut, class Rule = mcmc::HastingsRatio>
@@ -121,7 +140,8 @@ TEST(PathSpaceMlt, BidirectionalPairwiseBalance) {
 
 TEST(PathSpaceMlt, BidirectionalMissingGeometryTermIsCaught) {
   const Scene& sc = cornell();
-  const auto kernel = make_kernel(sc.ctx, BidirectionalMutation(sc.ctx, kMaxDepth + 1, BidirFault::kMissingGeometryTerm));
+  const BidirWithoutGeometryTerm broken(sc.ctx, kMaxDepth + 1);
+  const auto kernel = make_kernel(sc.ctx, MutationProposal{&broken, nullptr});
   const BidirectionalMutation correct(sc.ctx, kMaxDepth + 1);
   const auto ref = [&](int, const MltPath& x, const MltPath& y) { return reference_density(correct, x, y); };
   const auto r = pairwise(kernel, ref, sc.ctx, "bidir.nogeom", 400);
@@ -133,8 +153,10 @@ TEST(PathSpaceMlt, BidirectionalMissingGeometryTermIsCaught) {
 // Chi-square of one way of the bidirectional mutation (proposal_projections.h): the direction of
 // the regenerated vertex against the stated density converted to solid angle.
 SamplerChi2Result bidir_way_chi2(const BidirectionalMutation& mut, const MltPath& x, int s, int64_t samples,
-                                 uint64_t key) {
-  const BidirWayProjection proj{&mut, x, s};
+                                 uint64_t key, const BidirWithoutGeometryTerm* broken = nullptr) {
+  BidirWayProjection proj{&mut, x, s, nullptr};
+  if (broken)
+    proj.split_density = [broken](const MltPath& y, int l, int na, int sp) { return broken->split_density(y, l, na, sp); };
   SamplerChi2Options o;
   o.samples = samples;
   o.seed = 17;
@@ -152,13 +174,13 @@ MltPath path_with_segments(const PathContext& ctx, int k, uint64_t seed) {
 TEST(PathSpaceMlt, BidirectionalWayChi2) {
   const Scene& sc = cornell();
   const BidirectionalMutation mut(sc.ctx, kMaxDepth + 1);
-  const BidirectionalMutation broken(sc.ctx, kMaxDepth + 1, BidirFault::kMissingGeometryTerm);
+  const BidirWithoutGeometryTerm broken(sc.ctx, kMaxDepth + 1);
   const MltPath x = path_with_segments(sc.ctx, 3, 5);
   for (int s : {0, 1}) {
     const auto r = bidir_way_chi2(mut, x, s, 200000, hash_string("bidir.chi2") + s);
     std::printf("bidirectional way chi2 (s' = %d): %s\n", s, r.message().c_str());
     EXPECT_TRUE(r.passed(kAlpha)) << r.message();
-    const auto rb = bidir_way_chi2(broken, x, s, 200000, hash_string("bidir.chi2") + s);
+    const auto rb = bidir_way_chi2(mut, x, s, 200000, hash_string("bidir.chi2") + s, &broken);
     std::printf("  without geometry term: %s\n", rb.message().c_str());
     EXPECT_FALSE(rb.passed(kAlpha)) << rb.message();
   }
@@ -182,7 +204,8 @@ TEST(PathSpaceMlt, LensWithoutDensityRatioIsCaught) {
   const LensPerturbation correct(sc.ctx);
   const auto ref = [&](int, const MltPath& x, const MltPath& y) { return reference_density(correct, sc.ctx, x, y); };
   // The fault as a mutation stating T = const, and as the Metropolis-only acceptance rule.
-  const auto k1 = make_kernel(sc.ctx, LensPerturbation(sc.ctx, 0.1, 0.0, LensFault::kDropDensityRatio));
+  const auto broken = broken_lens(sc.ctx);
+  const auto k1 = make_kernel(sc.ctx, MutationProposal{broken.get(), nullptr});
   const auto r1 = pairwise(k1, ref, sc.ctx, "lens.noratio", 400);
   std::printf("lens without T ratio: %s\n", r1.message.c_str());
   EXPECT_FALSE(r1.passed);
@@ -254,22 +277,14 @@ TEST(PathSpaceMlt, CausticAngleChi2) {
 TEST(PathSpaceMlt, MixturePairwiseBalance) {
   const Scene& sc = cornell();
   const BidirectionalMutation bidir(sc.ctx, kMaxDepth + 1);
-  const LensPerturbation lens(sc.ctx);
-  const CausticPerturbation caustic(sc.ctx);
-  const MultiChainPerturbation multi(sc.ctx);
-  const auto kernel =
-      mcmc::MetropolisHastings(PathTarget{&sc.ctx}, mcmc::Mixture(MutationSelection{}, bidir, lens, caustic, multi));
-  const auto ref = [&](int j, const MltPath& x, const MltPath& y) {
-    return j == 0 ? reference_density(bidir, x, y) : j == 1 ? reference_density(lens, sc.ctx, x, y)
-                                                            : j == 2 ? reference_density(caustic, x, y)
-                                                                     : reference_density(multi, sc.ctx, x, y);
-  };
+  const PathMixture mix(registered(sc.ctx));
+  const auto kernel = mcmc::MetropolisHastings(PathTarget{&sc.ctx}, mix);
+  const auto ref = reference_of(mix, sc.ctx);
   const auto r = pairwise(kernel, ref, sc.ctx, "mixture", 600);
   std::printf("mixture pairwise: %s\n", r.message.c_str());
   EXPECT_TRUE(r.passed) << r.message;
   // Negative control: the acceptance without c_j(y) / c_j(x) (and T ratios).
-  const auto kb = mcmc::MetropolisHastings(PathTarget{&sc.ctx}, mcmc::Mixture(MutationSelection{}, bidir, lens, caustic, multi),
-                                           mcmc::MetropolisRatioOnly{});
+  const auto kb = mcmc::MetropolisHastings(PathTarget{&sc.ctx}, mix, mcmc::MetropolisRatioOnly{});
   const auto rb = pairwise(kb, ref, sc.ctx, "mixture.metropolis", 600);
   EXPECT_FALSE(rb.passed) << rb.message;
 }
@@ -280,16 +295,9 @@ TEST(PathSpaceMlt, MixturePairwiseBalance) {
 TEST(PathSpaceMlt, GlossySceneMixtureBalanceAndWays) {
   const Scene sc(16, "glossy.json");
   const BidirectionalMutation bidir(sc.ctx, kMaxDepth + 1);
-  const LensPerturbation lens(sc.ctx);
-  const CausticPerturbation caustic(sc.ctx);
-  const MultiChainPerturbation multi(sc.ctx);
-  const auto kernel =
-      mcmc::MetropolisHastings(PathTarget{&sc.ctx}, mcmc::Mixture(MutationSelection{}, bidir, lens, caustic, multi));
-  const auto ref = [&](int j, const MltPath& x, const MltPath& y) {
-    return j == 0 ? reference_density(bidir, x, y) : j == 1 ? reference_density(lens, sc.ctx, x, y)
-                                                            : j == 2 ? reference_density(caustic, x, y)
-                                                                     : reference_density(multi, sc.ctx, x, y);
-  };
+  const PathMixture mix(registered(sc.ctx));
+  const auto kernel = mcmc::MetropolisHastings(PathTarget{&sc.ctx}, mix);
+  const auto ref = reference_of(mix, sc.ctx);
   const auto r = pairwise(kernel, ref, sc.ctx, "glossy.mixture", 600);
   std::printf("glossy mixture pairwise: %s\n", r.message.c_str());
   EXPECT_TRUE(r.passed) << r.message;
@@ -327,24 +335,19 @@ double net_flux_min_p(const K& kernel, const PathContext& ctx, uint64_t key, std
 
 TEST(PathSpaceMlt, NetFluxOfMixtureAndNegativeControls) {
   const Scene& sc = cornell();
-  const BidirectionalMutation bidir(sc.ctx, kMaxDepth + 1);
-  const LensPerturbation lens(sc.ctx);
-  const CausticPerturbation caustic(sc.ctx);
-  const MultiChainPerturbation multi(sc.ctx);
   std::string m;
-  const auto kernel =
-      mcmc::MetropolisHastings(PathTarget{&sc.ctx}, mcmc::Mixture(MutationSelection{}, bidir, lens, caustic, multi));
+  const auto kernel = mcmc::MetropolisHastings(PathTarget{&sc.ctx}, PathMixture(registered(sc.ctx)));
   const double p = net_flux_min_p(kernel, sc.ctx, 1, &m);
   std::printf("net flux, mixture: Sidak p = %.3g (%s)\n", p, m.c_str());
   EXPECT_GT(p, kAlpha) << m;
   m.clear();
-  const BidirectionalMutation bidir_broken(sc.ctx, kMaxDepth + 1, BidirFault::kMissingGeometryTerm);
-  const auto kb = mcmc::MetropolisHastings(PathTarget{&sc.ctx}, mcmc::Mixture(MutationSelection{}, bidir_broken, lens, caustic, multi));
+  const auto kb = mcmc::MetropolisHastings(PathTarget{&sc.ctx},
+                                           PathMixture(with_bidir_without_geometry_term(sc.ctx, settings())));
   const double pb = net_flux_min_p(kb, sc.ctx, 2, &m);
   std::printf("net flux, bidirectional without geometry term: Sidak p = %.3g (%s)\n", pb, m.c_str());
   EXPECT_LT(pb, kAlpha) << m;
   m.clear();
-  const auto kl = make_kernel(sc.ctx, LensPerturbation(sc.ctx, 0.1, 0.0, LensFault::kDropDensityRatio));
+  const auto kl = mcmc::MetropolisHastings(PathTarget{&sc.ctx}, PathMixture({broken_lens(sc.ctx)}));
   const double pl = net_flux_min_p(kl, sc.ctx, 3, &m);
   std::printf("net flux, lens without T ratio: Sidak p = %.3g (%s)\n", pl, m.c_str());
 }
@@ -376,12 +379,17 @@ TEST(PathSpaceMlt, RenderRunsAndReportsAcceptance) {
   // Each mutation alone (timing and acceptance per type; single-threaded chains in parallel).
   for (int j = 0; j < 3; ++j) {
     MltOptions o;
-    o.selection = MutationSelection{j == 0 ? 1.0 : 0.0, j == 1 ? 1.0 : 0.0, j == 2 ? 1.0 : 0.0, 0.0};
-    if (j == 2) o.selection.p_lens = 1e-9;  // k = 1 paths need some other move
+    o.mutations = [j](const PathContext& ctx, const PathMutationSettings& ms) {
+      PathMutationList all = make_path_mutations(ctx, ms), one;
+      one.push_back(all[static_cast<size_t>(j)]);
+      // k = 1 paths need some other move than the caustic perturbation.
+      if (j == 2) one.push_back(std::make_shared<const PathProposalMutation<LensPerturbation>>("lens", 1e-9, LensPerturbation(ctx)));
+      return one;
+    };
     Film f1(16, 16);
     const MltStats one = run_mlt(*sc.world, st, f1, o);
-    std::printf("  %s alone: acceptance %.3f, %.0f mutations/s\n", one.mutations[j].name.c_str(),
-                one.mutations[j].acceptance_rate(), one.mutations_per_second());
+    std::printf("  %s alone: acceptance %.3f, %.0f mutations/s\n", one.mutations[0].name.c_str(),
+                one.mutations[0].acceptance_rate(), one.mutations_per_second());
   }
   // Deterministic: the same seed gives the same image, on one thread too.
   Film again(16, 16);
@@ -431,7 +439,7 @@ TEST(PathSpaceMlt, ImageUnbiasedAgainstBdpt) {
               s.mutations[0].acceptance_rate(), s.mutations[1].acceptance_rate());
   EXPECT_FALSE(c.rejects()) << c.message();
   MltOptions broken;
-  broken.bidir_fault = BidirFault::kMissingGeometryTerm;
+  broken.mutations = with_bidir_without_geometry_term;
   const auto cb = mlt_vs_bdpt(broken, &s);
   std::printf("mlt (bidirectional without geometry term) vs bdpt: %s\n", cb.message().c_str());
   EXPECT_TRUE(cb.rejects()) << cb.message();
@@ -508,18 +516,10 @@ std::function<MltPath(Uniforms&)> dirac_start_sampler(const PathContext& ctx) {
 TEST(PathSpaceMlt, DiracPairwiseBalance) {
   for (const char* file : {"caustic.json", "dg-glass.json", "dg-mirror-chain.json"}) {
     Scene sc(16, file);
-    const BidirectionalMutation bidir(sc.ctx, kMaxDepth + 1);
-    const LensPerturbation lens(sc.ctx);
-    const CausticPerturbation caustic(sc.ctx);
-    const MultiChainPerturbation multi(sc.ctx);
-    const auto kernel =
-        mcmc::MetropolisHastings(PathTarget{&sc.ctx}, mcmc::Mixture(MutationSelection{}, bidir, lens, caustic, multi));
+    const PathMixture mix(registered(sc.ctx));
+    const auto kernel = mcmc::MetropolisHastings(PathTarget{&sc.ctx}, mix);
     using K = decltype(kernel);
-    const auto ref = [&](int j, const MltPath& x, const MltPath& y) {
-      return j == 0 ? reference_density(bidir, x, y) : j == 1 ? reference_density(lens, sc.ctx, x, y)
-                                                              : j == 2 ? reference_density(caustic, x, y)
-                                                                     : reference_density(multi, sc.ctx, x, y);
-    };
+    const auto ref = reference_of(mix, sc.ctx);
     const WithReferenceDensity<K, decltype(ref)> k(kernel, ref, 8);
     const auto r = mcmc::check_pairwise_balance<WithReferenceDensity<K, decltype(ref)>>(
         k, dirac_start_sampler(sc.ctx), 600, 11, hash_string(file));

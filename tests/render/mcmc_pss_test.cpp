@@ -23,7 +23,8 @@
 #include "lib/mcmc/pss/msmlt.h"
 #include "lib/mcmc/pss/pss_driver.h"
 #include "lib/mcmc/pss/pss_kernel.h"
-#include "lib/mcmc/pss/rescaled_step.h"
+#include "lib/mcmc/pss/pss_steps.h"
+#include "validate/render/broken_pss.h"
 #include "lib/path/light_sampler.h"
 #include "lib/scene/scene_loader.h"
 #include "validate/mcmc/broken_variants.h"
@@ -187,14 +188,27 @@ TEST(PssKernel, SmallStepDensitySymmetricAndNormalised) {
     for (int i = 0; i < n; ++i) sum += wrapped_normal_pdf((i + 0.5) / n, sigma) / n;
     EXPECT_NEAR(sum, 1.0, 1e-9) << sigma;
   }
-  const SmallStep step(kSigma);
+  // The registered small step as the renderer's kernel proposes it (lazy state), on a target
+  // that reads every coordinate of a 12-dimensional state.
+  SampleFunction all;
+  all.sample = [](int, StreamUniforms& u, std::vector<Splat>* out) {
+    double v = 1.0;
+    for (int st = 0; st < kStreams; ++st) {
+      u.use_stream(st);
+      for (int i = 0; i < 4; ++i) v += u.next();
+    }
+    out->push_back({Vec2(0.5, 0.5), Rgb(v)});
+  };
+  PssStepSettings ps;
+  ps.sigma = kSigma;
+  const PssKernel k(all, 0, make_pss_mutations({"small step"}, ps), kSigma);
   RngUniforms u(rng);
   for (int i = 0; i < 200; ++i) {
     DenseState x(12);
     for (double& v : x) v = u.next();
-    const auto y = step.propose(x, u);
+    const auto y = k.propose(0, x, u);
     ASSERT_TRUE(y);
-    const double f = step.density(x, *y), b = step.density(*y, x);
+    const double f = k.density(0, x, *y), b = k.density(0, *y, x);
     EXPECT_GT(f, 0.0);
     EXPECT_NEAR(f, b, 1e-12 * f);
   }
@@ -231,8 +245,10 @@ TEST(PssKernel, PairwiseDetailedBalanceCornellBox) {
   const SampleFunction f = bdpt_sample_function(c.ctx, kRes, kRes, kDepth);
   const SampleFunction m = mmlt_sample_function(c.ctx, kRes, kRes, kDepth);
   const size_t dims = kStreams * 40;  // more than the sample functions read at max_depth 3
-  const auto kernel = make_pss_kernel(f, 0, kSigma, 0.3);
-  const auto mkernel = make_pss_kernel(m, 2, kSigma, 0.3);  // paths of 3 segments
+  PssStepSettings ps;
+  ps.sigma = kSigma;
+  const PssKernel kernel(f, 0, make_pss_mutations({"large step", "small step"}, ps), kSigma);
+  const PssKernel mkernel(m, 2, make_pss_mutations({"large step", "small step"}, ps), kSigma);  // 3 segments
   auto start = [&](const PssTarget& target) {
     return [&target, dims](Uniforms& u) {
       DenseState x(dims);
@@ -252,7 +268,7 @@ TEST(PssKernel, PairwiseDetailedBalanceCornellBox) {
   // the negative controls of this module (dropped rejected splat, dropped technique count).
 }
 
-// ---- rescaled small step (rescaled_step.h) -------------------------------------------------------
+// ---- rescaled small step (pss_steps.h) -----------------------------------------------------------
 
 // A synthetic sample function whose read set depends on the values read: the camera stream reads
 // 2 + floor(4 u_0) uniforms after its first, the light stream 1 + floor(3 u'_0); the value is
@@ -272,19 +288,18 @@ SampleFunction variable_reads_function() {
   return f;
 }
 
-// The lazy state's ratio (PssState::log_small_step_ratio) against the dense proposal density of
-// RescaledSmallStep on the same x and y, along a chain with accepted and rejected small and large
-// steps; and the moved coordinates: those in D(x) ∩ D(y) by sigma(x), as the density states.
+// The lazy state's ratio (the rescaled step's log_reverse_over_forward over the lazy move, as the
+// renderer's chain forms it) against its dense densities log T(y -> x) - log T(x -> y) on the same
+// x and y, along a chain with accepted and rejected small and large steps.
 TEST(PssState, RescaledLazyRatioMatchesDenseDensity) {
   const SampleFunction f = variable_reads_function();
-  StepRescaling r;
-  r.enabled = true;
-  r.sigma_max = 0.2;
+  PssStepSettings ps;
+  ps.sigma = kSigma;
+  ps.sigma_max = 0.2;
   const double y_ref = 3.0;
-  const RescaledSmallStep dense(f, 0, kSigma, y_ref, r);
+  const RescaledSmallStep step(ps);
   const size_t dims = kStreams * 12;
   PssState s(Rng(7), kSigma);
-  s.set_rescaled(true);
   std::vector<Splat> sp;
   auto eval = [&]() {
     sp.clear();
@@ -298,13 +313,21 @@ TEST(PssState, RescaledLazyRatioMatchesDenseDensity) {
   int compared = 0;
   for (int it = 0; it < 400; ++it) {
     const bool large = control.uniform() < 0.2;
-    const double sx = r.sigma(kSigma, y_ref, ix);
+    const double sx = step.scale(ix, y_ref);
     const auto dx = s.current_reads();
-    s.start_iteration(large, sx);
+    if (large)
+      s.start_iteration(true);
+    else
+      step.begin(s, sx);
     const double iy = eval();
     if (!large) {
-      const double sy = r.sigma(kSigma, y_ref, iy);
-      const double lazy = s.log_small_step_ratio(sx, sy);
+      const double sy = step.scale(iy, y_ref);
+      LazyPssMove lm(s);
+      lm.reads_x = dx;
+      lm.reads_y = s.reads();
+      lm.sigma_x = sx;
+      lm.sigma_y = sy;
+      const double lazy = step.log_reverse_over_forward(lm);
       // Dense x and y: coordinates in D(x) hold x's values, in D(y) y's; the rest agree.
       DenseState x(dims, 0.5), y(dims, 0.5);
       const auto dy = s.reads();
@@ -321,7 +344,12 @@ TEST(PssState, RescaledLazyRatioMatchesDenseDensity) {
       }
       ASSERT_NEAR(evaluate_dense(f, 0, x).value, ix, 1e-12 * ix);
       ASSERT_NEAR(evaluate_dense(f, 0, y).value, iy, 1e-12 * iy);
-      const double want = dense.log_density(y, x) - dense.log_density(x, y);
+      DenseMove fwd(x, y), back(y, x);
+      fwd.reads_x = back.reads_y = dx;
+      fwd.reads_y = back.reads_x = dy;
+      fwd.sigma_x = back.sigma_y = sx;
+      fwd.sigma_y = back.sigma_x = sy;
+      const double want = step.log_density(y, x, back) - step.log_density(x, y, fwd);
       if (std::isinf(want))  // g_sigma(y) underflows: a jump of many sigma(y) (both sides say so)
         ASSERT_EQ(lazy, want) << "iteration " << it;
       else
@@ -340,22 +368,21 @@ TEST(PssState, RescaledLazyRatioMatchesDenseDensity) {
 
 TEST(PssKernel, RescaledSmallStepPairwiseBalanceAndControl) {
   const SampleFunction f = variable_reads_function();
-  StepRescaling r;
-  r.enabled = true;
-  r.sigma_max = 0.2;
-  const RescaledSmallStep step(f, 0, kSigma, 3.0, r);
-  PssTarget target(f, 0);
+  PssStepSettings ps;
+  ps.sigma = kSigma;
+  ps.sigma_max = 0.2;
   auto start = [](Uniforms& u) {
     DenseState x(kStreams * 12);
     for (double& v : x) v = u.next();
     return x;
   };
-  const auto good = mcmc::MetropolisHastings(target, mcmc::SingleProposal(step));
-  const auto rg = mcmc::check_pairwise_balance<decltype(good)>(good, start, 3000, 12, 1);
+  const PssMutationList list = make_pss_mutations({"rescaled small step"}, ps);
+  const PssKernel good(f, 0, list, kSigma, 3.0);
+  const auto rg = mcmc::check_pairwise_balance<PssKernel>(good, start, 3000, 12, 1);
   EXPECT_TRUE(rg.passed) << rg.message;
-  const mcmc::MetropolisHastings<PssTarget, mcmc::SingleProposal<RescaledSmallStep>, mcmc::MetropolisRatioOnly> bad(
-      target, mcmc::SingleProposal(step));
-  const auto rb = mcmc::check_pairwise_balance<decltype(bad)>(bad, start, 3000, 12, 1);
+  // The renderer's own step with the ratio dropped (a wrapper of the registered mutation).
+  const PssKernel bad(f, 0, {std::make_shared<const WithoutProposalRatio>(list[0])}, kSigma, 3.0);
+  const auto rb = mcmc::check_pairwise_balance<PssKernel>(bad, start, 3000, 12, 1);
   EXPECT_FALSE(rb.passed) << rb.message;
   EXPECT_GT(rb.violations, 100);
 }
@@ -443,6 +470,15 @@ const Film& bdpt_reference() {
   return film;
 }
 
+// The negative controls, each a wrapper of the real component (validate/render/broken_pss.h).
+enum class PssFault { kNone, kNoRejectedSplat, kNoTechniqueCount, kSplatThroughput };
+
+void apply(PssFault fault, PssSettings* p) {
+  if (fault == PssFault::kNoRejectedSplat) p->splat_weight = splat_without_rejected;
+  if (fault == PssFault::kSplatThroughput) p->splat_weight = splat_throughput;
+  if (fault == PssFault::kNoTechniqueCount) p->wrap_sample = without_technique_count;
+}
+
 Film render_mcmc(bool mmlt, PssFault fault, int64_t spp_pass, PssStats* stats) {
   RenderSettings st;
   st.passes = kPasses;
@@ -453,7 +489,7 @@ Film render_mcmc(bool mmlt, PssFault fault, int64_t spp_pass, PssStats* stats) {
   // b's error is common to all pixels of a pass: keep it below theirs (docs/mlt-pss.md, "Checks").
   p.bootstrap = mmlt ? 2 * spp_pass * kRes * kRes : spp_pass * kRes * kRes / 2;
   p.chains = 256;
-  p.fault = fault;
+  apply(fault, &p);
   Film film(kRes, kRes);
   if (mmlt)
     render_mmlt(*cornell().world, st, p, film, stats);
@@ -535,7 +571,7 @@ void expect_compare_variant(bool msmlt, PssFault fault, int64_t spp_pass, bool e
   PssSettings p;
   p.bootstrap = spp_pass * kRes * kRes / 2;
   p.chains = 256;
-  p.fault = fault;
+  apply(fault, &p);
   Film film(kRes, kRes);
   PssStats stats;
   if (msmlt) {

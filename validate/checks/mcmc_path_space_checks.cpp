@@ -44,18 +44,20 @@
 #include "lib/core/hash.h"
 #include "lib/integrator/bdpt.h"
 #include "lib/mcmc/pss/pss_driver.h"
-#include "lib/mcmc/path_space/flux_bins.h"
+#include "validate/mcmc/path_space/flux_bins.h"
 #include "lib/mcmc/path_space/mlt.h"
-#include "lib/mcmc/path_space/net_flux.h"
-#include "lib/mcmc/path_space/proposal_projections.h"
-#include "lib/mcmc/path_space/reference_density.h"
+#include "validate/mcmc/path_space/net_flux.h"
+#include "validate/mcmc/path_space/proposal_projections.h"
+#include "validate/mcmc/path_space/reference_density.h"
 #include "lib/mcmc/path_space/start_paths.h"
 #include "lib/path/dirac.h"
 #include "lib/path/light_sampler.h"
 #include "validate/chi2/sampler_chi2.h"
 #include "validate/mcmc/broken_variants.h"
 #include "validate/mcmc/pairwise_balance.h"
+#include "validate/mcmc/registered_mutations.h"
 #include "validate/registry.h"
+#include "validate/render/broken_path_mutations.h"
 #include "validate/render/pixel_groups.h"
 #include "validate/render/render_compare.h"
 #include "validate/stats/tests.h"
@@ -114,6 +116,23 @@ std::function<MltPath(Uniforms&)> start_paths(const PathContext& ctx, bool dirac
   };
 }
 
+// The negative controls of this file, each a wrapper of the registered mutation
+// (validate/render/broken_path_mutations.h).
+enum class BidirFault { kNone, kMissingGeometryTerm };
+enum class LensFault { kNone, kDropDensityRatio };
+
+PathMutationSettings mutation_settings() {
+  PathMutationSettings s;
+  s.max_segments = kMaxDepth + 1;
+  return s;
+}
+
+// The registered mutations for a scene, the bidirectional one broken on request.
+PathMutationList scene_mutations(const CornellScene& sc, BidirFault bidir = BidirFault::kNone) {
+  return bidir == BidirFault::kMissingGeometryTerm ? with_bidir_without_geometry_term(sc.ctx, mutation_settings())
+                                                   : make_path_mutations(sc.ctx, mutation_settings());
+}
+
 CheckResult negate(CheckResult inner) {
   inner.passed = !inner.passed;
   inner.message =
@@ -156,18 +175,21 @@ CheckResult bidir_pairwise(BidirFault fault, const CheckContext& cx, const std::
                            const std::string& file = "cornell-box.json", bool dirac_only = false) {
   const CornellScene& sc = scene(file);
   const BidirectionalMutation correct(sc.ctx, kMaxDepth + 1);
-  return run_pairwise(BidirectionalMutation(sc.ctx, kMaxDepth + 1, fault),
-                      [&](const MltPath& x, const MltPath& y) { return reference_density(correct, x, y); }, cx, name,
-                      sc, dirac_only);
+  const auto ref = [&](const MltPath& x, const MltPath& y) { return reference_density(correct, x, y); };
+  if (fault == BidirFault::kNone) return run_pairwise(correct, ref, cx, name, sc, dirac_only);
+  const BidirWithoutGeometryTerm broken(sc.ctx, kMaxDepth + 1);
+  return run_pairwise(MutationProposal{&broken, nullptr}, ref, cx, name, sc, dirac_only);
 }
 
 CheckResult lens_pairwise(LensFault fault, const CheckContext& cx, const std::string& name,
                           const std::string& file = "cornell-box.json", bool dirac_only = false) {
   const CornellScene& sc = scene(file);
   const LensPerturbation correct(sc.ctx);
-  return run_pairwise(LensPerturbation(sc.ctx, 0.1, 0.0, fault),
-                      [&](const MltPath& x, const MltPath& y) { return reference_density(correct, sc.ctx, x, y); },
-                      cx, name, sc, dirac_only);
+  const auto ref = [&](const MltPath& x, const MltPath& y) { return reference_density(correct, sc.ctx, x, y); };
+  if (fault == LensFault::kNone) return run_pairwise(correct, ref, cx, name, sc, dirac_only);
+  const LensWithoutDensityRatio broken(std::make_shared<const PathProposalMutation<LensPerturbation>>("lens", 1.0, correct));
+  return run_pairwise(MutationProposal{&broken, [&correct](const MltPath& x) { return correct.applicable(x); }}, ref, cx,
+                      name, sc, dirac_only);
 }
 
 CheckResult caustic_pairwise(const CheckContext& cx, const std::string& name,
@@ -208,18 +230,12 @@ template <class Rule>
 CheckResult mixture_pairwise(Rule rule, const CheckContext& cx, const std::string& name,
                              const std::string& file = "cornell-box.json", bool dirac_only = false) {
   const CornellScene& sc = scene(file);
-  const BidirectionalMutation bidir(sc.ctx, kMaxDepth + 1);
-  const LensPerturbation lens(sc.ctx);
-  const CausticPerturbation caustic(sc.ctx);
-  const MultiChainPerturbation multi(sc.ctx);
-  const auto kernel =
-      mcmc::MetropolisHastings(PathTarget{&sc.ctx}, mcmc::Mixture(MutationSelection{}, bidir, lens, caustic, multi), rule);
+  const PathMixture mix(scene_mutations(sc));
+  const auto kernel = mcmc::MetropolisHastings(PathTarget{&sc.ctx}, mix, rule);
   using K = decltype(kernel);
-  const auto ref = [&](int j, const MltPath& x, const MltPath& y) {
-    return j == 0 ? reference_density(bidir, x, y)
-                  : j == 1 ? reference_density(lens, sc.ctx, x, y)
-                  : j == 2 ? reference_density(caustic, x, y) : reference_density(multi, sc.ctx, x, y);
-  };
+  std::vector<std::function<double(const MltPath&, const MltPath&)>> refs;
+  for (int j = 0; j < mix.components(); ++j) refs.push_back(reference_density_of(mix.component(j), sc.ctx));
+  const auto ref = [&refs](int j, const MltPath& x, const MltPath& y) { return refs[static_cast<size_t>(j)](x, y); };
   const WithReferenceDensity<K, decltype(ref)> k(kernel, ref, 8);
   const std::function<MltPath(Uniforms&)> start = start_paths(sc.ctx, dirac_only);
   const auto r = mcmc::check_pairwise_balance<WithReferenceDensity<K, decltype(ref)>>(
@@ -258,11 +274,14 @@ CheckResult chi2_record(const std::vector<std::pair<std::string, SamplerChi2Resu
 
 CheckResult bidir_chi2(BidirFault fault, const CheckContext& cx, const std::string& name) {
   const CornellScene& sc = cornell();
-  const BidirectionalMutation mut(sc.ctx, kMaxDepth + 1, fault);
+  const BidirectionalMutation mut(sc.ctx, kMaxDepth + 1);
+  const BidirWithoutGeometryTerm broken(sc.ctx, kMaxDepth + 1);
   std::vector<std::pair<std::string, SamplerChi2Result>> runs;
   for (int k : {3, 4})
     for (int s : {0, 1}) {
-      const BidirWayProjection proj{&mut, path_with_segments(sc.ctx, k, kMaxDepth, cx.seed + k), s};
+      BidirWayProjection proj{&mut, path_with_segments(sc.ctx, k, kMaxDepth, cx.seed + k), s, nullptr};
+      if (fault == BidirFault::kMissingGeometryTerm)
+        proj.split_density = [&broken](const MltPath& y, int l, int na, int sp) { return broken.split_density(y, l, na, sp); };
       SamplerChi2Options o;
       o.samples = cx.size(100000, 1000000);
       o.seed = cx.seed;
@@ -421,12 +440,7 @@ CheckResult multi_chain_chi2(const CheckContext& cx, const std::string& name, do
 // ---- net flux: antisymmetric statistics of chains from importance-resampled starts (net_flux.h) ----
 CheckResult net_flux_check(BidirFault fault, const CheckContext& cx, const std::string& name) {
   const CornellScene& sc = cornell();
-  const BidirectionalMutation bidir(sc.ctx, kMaxDepth + 1, fault);
-  const LensPerturbation lens(sc.ctx);
-  const CausticPerturbation caustic(sc.ctx);
-  const MultiChainPerturbation multi(sc.ctx);
-  const auto kernel =
-      mcmc::MetropolisHastings(PathTarget{&sc.ctx}, mcmc::Mixture(MutationSelection{}, bidir, lens, caustic, multi));
+  const auto kernel = mcmc::MetropolisHastings(PathTarget{&sc.ctx}, PathMixture(scene_mutations(sc, fault)));
   NetFluxOptions o;
   o.chains = cx.size(256, 2048);
   o.steps = 150;
@@ -476,10 +490,10 @@ FluxBinCounts run_flux_bins(const K& kernel, const CornellScene& sc, FluxBinOpti
 CheckResult flux_bins_check(LensFault lens_fault, bool lens_only, const CheckContext& cx, const std::string& name,
                             const std::string& file = "cornell-box.json", BidirFault bidir_fault = BidirFault::kNone) {
   const CornellScene& sc = scene(file);
-  const BidirectionalMutation bidir(sc.ctx, kMaxDepth + 1, bidir_fault);
-  const LensPerturbation lens(sc.ctx, 0.1, lens_only ? 0.5 * kResolution : 0.0, lens_fault);
-  const CausticPerturbation caustic(sc.ctx);
-  const MultiChainPerturbation multi(sc.ctx);
+  // The lens alone with r2 = half the image (its own instance, wrapped as the registered one is).
+  std::shared_ptr<const PathMutation> lens = std::make_shared<const PathProposalMutation<LensPerturbation>>(
+      "lens", 1.0, LensPerturbation(sc.ctx, 0.1, 0.5 * kResolution));
+  if (lens_fault == LensFault::kDropDensityRatio) lens = std::make_shared<const LensWithoutDensityRatio>(lens);
   FluxBinOptions o;
   o.chains = cx.size(4096, 32768);
   o.burn_in = 8;
@@ -494,11 +508,9 @@ CheckResult flux_bins_check(LensFault lens_fault, bool lens_only, const CheckCon
     o.steps = 400;
   }
   const FluxBinCounts f =
-      lens_only ? run_flux_bins(mcmc::MetropolisHastings(PathTarget{&sc.ctx}, mcmc::SingleProposal<LensPerturbation>(lens)),
-                                sc, o)
-                : run_flux_bins(mcmc::MetropolisHastings(PathTarget{&sc.ctx},
-                                                         mcmc::Mixture(MutationSelection{}, bidir, lens, caustic, multi)),
-                                sc, o);
+      run_flux_bins(mcmc::MetropolisHastings(PathTarget{&sc.ctx},
+                                             lens_only ? PathMixture({lens}) : PathMixture(scene_mutations(sc, bidir_fault))),
+                    sc, o);
   double p_min = 1.0;
   int64_t tested = 0;
   std::pair<int, int> worst{-1, -1};
@@ -828,6 +840,11 @@ const bool registered = [] {
   add(p + "caustic.angle_chi2",
       "Caustic perturbation: realised direction change against the stated density in (phi, ln theta) (chi-square)",
       CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) { return caustic_chi2(cx, n); });
+  add(p + "registered_mutations.pairwise",
+      "Every registered path mutation alone: pi T a symmetric to 1e-9 on seeded Cornell-box path pairs, stated T "
+      "against its reference density",
+      CheckKind::kDeterministic,
+      [](const CheckContext& cx, const std::string& n) { return path_registered_mutations_pairwise(cx, n); });
   add(p + "mixture.pairwise",
       "The MLT kernel (bidirectional + lens + caustic, length-dependent selection): pi c T a symmetric to 1e-9",
       CheckKind::kDeterministic, [](const CheckContext& cx, const std::string& n) {
@@ -909,7 +926,7 @@ const bool registered = [] {
       "geometry term",
       CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) {
         MltOptions o;
-        o.bidir_fault = BidirFault::kMissingGeometryTerm;
+        o.mutations = with_bidir_without_geometry_term;
         return negate(grouped_image_check(o, cx, n, "glossy.json", 4096));
       });
   add(p + "mixture.flux_bins",
@@ -953,7 +970,7 @@ const bool registered = [] {
       "Negative control: the image check must reject render_mlt with a bidirectional density without geometry term",
       CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) {
         MltOptions o;
-        o.bidir_fault = BidirFault::kMissingGeometryTerm;
+        o.mutations = with_bidir_without_geometry_term;
         return negate(image_check(o, cx, n));
       });
   add(p + "negative_control.lens_missing_ratio.pairwise",

@@ -38,13 +38,15 @@
 #include "lib/mcmc/pss/msmlt.h"
 #include "lib/mcmc/pss/pss_driver.h"
 #include "lib/mcmc/pss/pss_kernel.h"
-#include "lib/mcmc/pss/rescaled_step.h"
+#include "lib/mcmc/pss/pss_steps.h"
 #include "lib/path/light_sampler.h"
 #include "validate/chi2/sampler_chi2.h"
 #include "validate/mcmc/broken_variants.h"
 #include "validate/mcmc/flux_symmetry.h"
 #include "validate/mcmc/pairwise_balance.h"
+#include "validate/mcmc/registered_mutations.h"
 #include "validate/registry.h"
+#include "validate/render/broken_pss.h"
 #include "validate/render/render_compare.h"
 
 namespace tb {
@@ -119,42 +121,41 @@ CheckResult pairwise(const K& kernel, const CheckContext& ctx, const std::string
 
 enum class Mutation { kSmall, kLarge, kMixture };
 
+// The kernel the renderer runs (PssKernel over the registered mutations) with the given list.
+PssKernel pss_kernel(const SampleFunction& f, int level, const std::vector<std::string>& names, double y_ref = 1.0) {
+  const PssSettings defaults;
+  return PssKernel(f, level, make_pss_mutations(names, defaults.step_settings()), defaults.sigma, y_ref);
+}
+
 CheckResult run_pairwise(const CheckContext& ctx, bool mmlt, Mutation m, const std::string& name) {
   const CornellBox box(16);
   const SampleFunction f = mmlt ? mmlt_sample_function(box.ctx, 16, 16, kMaxDepth)
                                 : bdpt_sample_function(box.ctx, 16, 16, kMaxDepth);
   const int level = mmlt ? 2 : 0;  // MMLT: paths of 3 segments (4 techniques)
-  const PssSettings defaults;
-  PssTarget target(f, level);
   switch (m) {
-    case Mutation::kSmall:
-      return pairwise(mcmc::MetropolisHastings(target, mcmc::SingleProposal(SmallStep(defaults.sigma))), ctx, name);
-    case Mutation::kLarge:
-      return pairwise(mcmc::MetropolisHastings(target, mcmc::SingleProposal(LargeStep())), ctx, name);
-    case Mutation::kMixture:
-      break;
+    case Mutation::kSmall: return pairwise(pss_kernel(f, level, {"small step"}), ctx, name);
+    case Mutation::kLarge: return pairwise(pss_kernel(f, level, {"large step"}), ctx, name);
+    case Mutation::kMixture: break;
   }
-  return pairwise(make_pss_kernel(f, level, defaults.sigma, defaults.large_step_probability), ctx, name);
+  return pairwise(PssKernel(f, level, PssSettings{}.mutation_list(), PssSettings{}.sigma), ctx, name);
 }
 
 // ---- the rescaled small step ---------------------------------------------------------------------
 // sigma(x) = clamp(sigma0 (Y_ref / I(x)), 1e-4, 0.1) with Y_ref the mean of I over uniform states
-// (the renderer's b), so that sigma spans its range over the pairs. Negative control: the same
-// kernel accepted by min(1, pi(y) / pi(x)) (validate/mcmc/broken_variants.h MetropolisRatioOnly).
+// (the renderer's b), so that sigma spans its range over the pairs. The kernel is the renderer's:
+// its acceptance comes from the mutation's own T ratio (pss_move_terms), as in the chain step of
+// pss_driver.cpp. Negative control: the same mutation with its ratio dropped (broken_pss.h
+// WithoutProposalRatio, the acceptance min(1, pi(y) / pi(x))) must violate balance.
 CheckResult run_rescaled_pairwise(const CheckContext& ctx, bool pt, bool no_ratio, const std::string& name) {
   const CornellBox box(16);
   const SampleFunction f = pt ? pt_sample_function(box, 16) : bdpt_sample_function(box.ctx, 16, 16, kMaxDepth);
   const double y_ref = mean_over_uniform_states([&f](const DenseState& x) { return evaluate_dense(f, 0, x).value; },
                                                 ctx.seed, hash_string(name + ".y_ref"));
-  StepRescaling r;
-  r.enabled = true;
-  const RescaledSmallStep step(f, 0, PssSettings{}.sigma, y_ref, r);
-  PssTarget target(f, 0);
-  CheckResult res = no_ratio ? pairwise(mcmc::MetropolisHastings<PssTarget, mcmc::SingleProposal<RescaledSmallStep>,
-                                                                 mcmc::MetropolisRatioOnly>(
-                                            target, mcmc::SingleProposal(step), mcmc::MetropolisRatioOnly{}),
-                                        ctx, name)
-                             : pairwise(mcmc::MetropolisHastings(target, mcmc::SingleProposal(step)), ctx, name);
+  PssSettings p;
+  p.rescale.enabled = true;
+  PssMutationList list = make_pss_mutations({"rescaled small step"}, p.step_settings());
+  if (no_ratio) list[0] = std::make_shared<const WithoutProposalRatio>(list[0]);
+  CheckResult res = pairwise(PssKernel(f, 0, list, p.sigma, y_ref), ctx, name);
   res.details["y_ref"] = y_ref;
   if (no_ratio) {
     res.passed = !res.passed && res.details["violations"].get<int64_t>() > 0;
@@ -235,6 +236,7 @@ CheckResult run_pss_flux(const CheckContext& ctx, FluxVariant v, const std::stri
   std::function<double(const DenseState&)> pi = [&f, level](const DenseState& x) {
     return evaluate_dense(f, level, x).value;
   };
+  SplatTarget custom_pi;
   if (v == FluxVariant::kMsmlt) {
     Film pilot(kRes, kRes);
     RenderSettings ps = rs;
@@ -243,6 +245,7 @@ CheckResult run_pss_flux(const CheckContext& ctx, FluxVariant v, const std::stri
     ps.seed = hash_values(ctx.seed, hash_string(name + ".guide"));
     render_bdpt(*box.world, ps, pilot);
     const auto guide = std::make_shared<GuideImage>(pilot.mean_image(), kRes, kRes, 4, MultiStageSettings{}.floor_fraction);
+    custom_pi = [guide](const std::vector<Splat>& sp) { return guide->target(sp); };
     pi = [&f, guide](const DenseState& x) {
       thread_local std::vector<Splat> sp;
       sp.clear();
@@ -264,25 +267,15 @@ CheckResult run_pss_flux(const CheckContext& ctx, FluxVariant v, const std::stri
     PssFluxTarget<std::decay_t<decltype(kernel)>> t{&kernel, pi, kRes, kRes, 4, b};
     return mcmc::check_flux_symmetry(kernel, t, chains, steps, ctx.seed, hash_string(name), kFluxAlpha);
   };
-  struct PiTarget {
-    using State = DenseState;
-    const std::function<double(const DenseState&)>* pi;
-    double density(const State& x) const { return (*pi)(x); }
-  };
-  const PiTarget target{&pi};
-  const mcmc::Mixture mix(LargeStepSelection{defaults.large_step_probability}, SmallStep(defaults.sigma), LargeStep());
-  StepRescaling resc;
-  resc.enabled = true;
-  const RescaledSmallStep rstep(f, 0, defaults.sigma, b, resc);
-  const mcmc::Mixture rmix(LargeStepSelection{defaults.large_step_probability}, rstep, LargeStep());
-  mcmc::FluxSymmetryResult r;
-  switch (v) {
-    case FluxVariant::kRescaled: r = run(mcmc::MetropolisHastings(target, rmix)); break;
-    case FluxVariant::kRescaledNoRatio:
-      r = run(mcmc::MetropolisHastings<PiTarget, decltype(rmix), mcmc::MetropolisRatioOnly>(target, rmix, {}));
-      break;
-    default: r = run(mcmc::MetropolisHastings(target, mix)); break;
-  }
+  // The renderer's kernels: the default mixture, or the large step with the rescaled small step
+  // (the control: its T ratio dropped by the WithoutProposalRatio wrapper).
+  const SplatTarget splat_pi = custom_pi;
+  const bool rescaled = v == FluxVariant::kRescaled || v == FluxVariant::kRescaledNoRatio;
+  PssSettings p;
+  p.rescale.enabled = rescaled;
+  const PssMutationList list = v == FluxVariant::kRescaledNoRatio ? without_proposal_ratio(p, "rescaled small step")
+                                                                   : p.mutation_list();
+  const mcmc::FluxSymmetryResult r = run(PssKernel(f, level, list, defaults.sigma, b, splat_pi));
   CheckResult res;
   res.passed = r.passed;
   res.statistic_name = "min(Šidák pair p, global chi2 p)";
@@ -357,9 +350,9 @@ CheckResult run_lazy_chi2(const CheckContext& ctx, bool misstated, const std::st
 // Proposal chi-square (issue 6, "for every mutation: proposal samples against the stated density in
 // a low-dimensional projection"). Projection: the displacement d = y_0 - x_0 (wrapped to (-1/2,
 // 1/2]) of coordinate 0, the camera raster's first uniform, which every state reads, so that the
-// rescaled step moves it with sigma(x) (rescaled_step.h: D(x) ∩ D(y)). Stated marginal: the
-// coordinate-0 factor of RescaledSmallStep's T, the wrapped normal g_{sigma(x)} with
-// sigma(x) = sigma_at(pi(x)); the large step: uniform. Three states x of the 16x16 Cornell box
+// rescaled step moves it with sigma(x) (pss_steps.h: D(x) ∩ D(y)). Stated marginal: the
+// coordinate-0 factor of the rescaled small step's T, the wrapped normal g_{sigma(x)} with
+// sigma(x) = scale(pi(x)); the large step: uniform. Three states x of the 16x16 Cornell box
 // (PT target) with sigma(x) in [0.02, 0.1] (dim paths; on bright ones sigma reaches 1e-4, below the
 // 1/401 cell width); chi-square over 401 cells of d + 1/2, alpha 1e-5 Šidák over the three.
 // Negative control: the rescaled step's density stated with sigma 5 % too wide (VALIDATION.md E,
@@ -372,15 +365,14 @@ CheckResult run_step_chi2(const CheckContext& ctx, bool large, bool misstated, c
   const double b = mean_over_uniform_states([&f](const DenseState& x) { return evaluate_dense(f, 0, x).value; },
                                             ctx.seed, hash_string(name + ".states"), &rng);
   DenseState x(kStreams * kPerStream);
-  StepRescaling resc;
-  resc.enabled = true;
-  const RescaledSmallStep step(f, 0, PssSettings{}.sigma, b, resc);
+  // The renderer's mutations, proposed by its lazy state (PssKernel): 0 large, 1 rescaled small step.
+  const PssKernel kernel = pss_kernel(f, 0, {"large step", "rescaled small step"}, b);
   std::vector<DenseState> xs;
   std::vector<double> sig;
   for (int tries = 0; tries < 100000 && xs.size() < 3; ++tries) {
     for (double& v : x) v = rng.uniform();
     const double pi = evaluate_dense(f, 0, x).value;
-    const double sx = step.sigma_at(pi);
+    const double sx = kernel.mutation(1).scale(pi, b);
     if (!(pi > 0.0) || sx < 0.02 || sx > 0.1) continue;
     if (!sig.empty() && std::abs(sx - sig.back()) < 0.005) continue;  // spread the sigmas
     xs.push_back(x);
@@ -397,7 +389,7 @@ CheckResult run_step_chi2(const CheckContext& ctx, bool large, bool misstated, c
   for (size_t c = 0; c < xs.size(); ++c) {
     const DenseState& x0 = xs[c];
     const auto sample = [&](Uniforms& u) -> std::optional<double> {
-      const auto y = large ? LargeStep().propose(x0, u) : step.propose(x0, u);
+      const auto y = kernel.propose(large ? 0 : 1, x0, u);
       if (!y) return std::nullopt;
       double d = (*y)[0] - x0[0];
       d -= std::round(d);  // (-1/2, 1/2]
@@ -463,6 +455,9 @@ std::shared_ptr<const Film> bdpt_reference(const CornellBox& box, const ImageSiz
 
 enum class Variant { kPssmlt, kMmlt, kMsmlt, kPssmltPtRescaled, kPssmltPt, kMsmltMmlt };
 
+// Negative controls of the image checks, each a wrapper of the real component (broken_pss.h).
+enum class PssFault { kNone, kNoRejectedSplat, kNoTechniqueCount, kSplatThroughput };
+
 CheckResult run_image(const CheckContext& ctx, Variant variant, PssFault fault, const std::string& name,
                       const std::string& scene = "cornell-box.json") {
   const bool mmlt = variant == Variant::kMmlt || variant == Variant::kMsmltMmlt;
@@ -481,7 +476,9 @@ CheckResult run_image(const CheckContext& ctx, Variant variant, PssFault fault, 
   const int64_t N = sz.spp_pass * sz.res * sz.res;  // mutations per pass
   p.bootstrap = mmlt ? 2 * N : N / 2;  // b's noise is common to all pixels: keep it below theirs
   p.chains = 256;
-  p.fault = fault;
+  if (fault == PssFault::kNoRejectedSplat) p.splat_weight = splat_without_rejected;
+  if (fault == PssFault::kSplatThroughput) p.splat_weight = splat_throughput;
+  if (fault == PssFault::kNoTechniqueCount) p.wrap_sample = without_technique_count;
   Film film(sz.res, sz.res);
   PssStats stats;
   MultiStageSettings ms;
@@ -721,6 +718,14 @@ const bool registered = [] {
         .kind = CheckKind::kDeterministic,
         .run = [pt, no_ratio, name](const CheckContext& ctx) { return run_rescaled_pairwise(ctx, pt, no_ratio, name); }});
   }
+  Registry::global().add(Check{
+      .name = "mcmc.pss.cornell.registered_mutations.pairwise",
+      .description = "pi T a symmetric to 1e-9 for every registered PSS mutation alone, run by the renderer's kernel "
+                     "(PSSMLT over the path tracer, Cornell box)",
+      .kind = CheckKind::kDeterministic,
+      .run = [](const CheckContext& ctx) {
+        return pss_registered_mutations_pairwise(ctx, "mcmc.pss.cornell.registered_mutations.pairwise");
+      }});
   Registry::global().add(Check{
       .name = "render.msmlt.cornell.visits_cv",
       .description = "coefficient of variation of mutations per pixel: multi-stage MLT below PSSMLT (Zirr 2020, Fig. 6)",

@@ -31,6 +31,7 @@ struct PairwiseBalanceResult {
   int64_t failed_proposals = 0; // proposals that returned nothing
   int64_t violations = 0;       // pairs above tolerance
   int64_t nonfinite = 0;
+  int64_t zero_forward = 0;     // proposed moves whose stated forward density is 0 (errors)
   double max_rel_residual = 0.0;
   int64_t worst_index = -1;     // reproducer: Rng::for_sample(seed, key, worst_index)
   double tolerance = 1e-9;
@@ -44,7 +45,7 @@ PairwiseBalanceResult check_pairwise_balance(const K& kernel,
                                              int64_t pairs, uint64_t seed, uint64_t key, double tolerance = 1e-9) {
   struct Local {
     double rel = 0.0;
-    int live = 0, failed = 0, nonfinite = 0;
+    int live = 0, failed = 0, nonfinite = 0, zero_forward = 0;
   };
   std::vector<Local> out(pairs);
   parallel_for(static_cast<size_t>(pairs), [&](size_t i) {
@@ -58,6 +59,12 @@ PairwiseBalanceResult check_pairwise_balance(const K& kernel,
     }
     const typename K::State y = kernel.destination(*m);
     const auto mr = kernel.reverse(x, *m);
+    // A move the kernel made but states it could not have made (forward density 0 into a state of
+    // positive target) is an error of the proposal, counted and failed, never read as flux-free.
+    if (decide(kernel.move_terms(x, *m)).status == MoveStatus::kZeroForward) {
+      out[i].zero_forward = 1;
+      return;
+    }
     const double f = kernel.target_density(x) * kernel.move_density(x, *m) * kernel.acceptance(x, *m);
     const double b = kernel.target_density(y) * kernel.move_density(y, mr) * kernel.acceptance(y, mr);
     if (!std::isfinite(f) || !std::isfinite(b)) {
@@ -77,6 +84,7 @@ PairwiseBalanceResult check_pairwise_balance(const K& kernel,
     r.live += out[i].live;
     r.failed_proposals += out[i].failed;
     r.nonfinite += out[i].nonfinite;
+    r.zero_forward += out[i].zero_forward;
     r.violations += out[i].rel > tolerance;
     if (out[i].rel > r.max_rel_residual) {
       r.max_rel_residual = out[i].rel;
@@ -84,11 +92,11 @@ PairwiseBalanceResult check_pairwise_balance(const K& kernel,
     }
   }
   // At least half of the pairs must carry flux, or the check says little.
-  r.passed = r.violations == 0 && r.nonfinite == 0 && 2 * r.live >= pairs;
+  r.passed = r.violations == 0 && r.nonfinite == 0 && r.zero_forward == 0 && 2 * r.live >= pairs;
   r.message = fmt::format("{} pairs ({} with flux, {} failed proposals): max relative |F - B| = {:.3g} (pair {}), "
-                          "{} above {:.0e}, {} non-finite",
+                          "{} above {:.0e}, {} non-finite, {} proposed with stated forward density 0",
                           pairs, r.live, r.failed_proposals, r.max_rel_residual, r.worst_index, r.violations,
-                          tolerance, r.nonfinite);
+                          tolerance, r.nonfinite, r.zero_forward);
   return r;
 }
 

@@ -45,12 +45,6 @@ int positions(const MltPath& x, int kd) {
   return n;
 }
 
-// The solid-angle-to-area factor |cos_to| / d^2 of a step (negative control only).
-double area_factor(const PathVertex& from, const PathVertex& to) {
-  if (from.infinite || to.infinite) return 1.0;
-  return solid_angle_to_area(1.0, from.hit.p, to.hit.p, to.geometric_normal());
-}
-
 }  // namespace
 
 double BidirectionalMutation::deletion_probability(const MltPath& x, int l, int m) const {
@@ -108,21 +102,16 @@ std::optional<BidirectionalMutation::Way> BidirectionalMutation::way_between(con
 double BidirectionalMutation::split_density(const MltPath& y, int l, int na, int s) const {
   const std::vector<PathVertex>& v = y.v;
   const int ky = y.segments();
-  const bool no_geometry = fault_ == BidirFault::kMissingGeometryTerm;
   double p = 1.0;
   for (int i = l + 1; i <= l + s; ++i) {  // light side: sampled from y_{i-1} (and y_{i-2})
     if (i == 0) {
       p *= pdf_light_origin(*ctx_, v[0]);
       continue;
     }
-    double pi = pdf_next_dirac(*ctx_, i >= 2 ? &v[i - 2] : nullptr, v[i - 1], v[i], TransportMode::kImportance);
-    if (no_geometry) pi /= area_factor(v[i - 1], v[i]);
-    p *= pi;
+    p *= pdf_next_dirac(*ctx_, i >= 2 ? &v[i - 2] : nullptr, v[i - 1], v[i], TransportMode::kImportance);
   }
   for (int i = l + s + 1; i <= l + na; ++i) {  // camera side: sampled from y_{i+1} (and y_{i+2})
-    double pi = pdf_next_dirac(*ctx_, i + 2 <= ky ? &v[i + 2] : nullptr, v[i + 1], v[i], TransportMode::kRadiance);
-    if (no_geometry) pi /= area_factor(v[i + 1], v[i]);
-    p *= pi;
+    p *= pdf_next_dirac(*ctx_, i + 2 <= ky ? &v[i + 2] : nullptr, v[i + 1], v[i], TransportMode::kRadiance);
   }
   return p;
 }

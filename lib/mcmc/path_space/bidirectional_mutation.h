@@ -42,12 +42,6 @@
 
 namespace tb::path_space {
 
-// Deliberate errors for the negative controls (never set by the renderer).
-enum class BidirFault {
-  kNone,
-  kMissingGeometryTerm,  // p_{s'} with the solid-angle densities of the added vertices (no |cos| / d^2)
-};
-
 class BidirectionalMutation {
  public:
   using State = MltPath;
@@ -57,8 +51,7 @@ class BidirectionalMutation {
     int na() const { return ka - 1; }
   };
 
-  BidirectionalMutation(const PathContext& ctx, int max_segments, BidirFault fault = BidirFault::kNone)
-      : ctx_(&ctx), max_segments_(max_segments), fault_(fault) {}
+  BidirectionalMutation(const PathContext& ctx, int max_segments) : ctx_(&ctx), max_segments_(max_segments) {}
 
   // Proposal concept (estimators/mcmc/concepts.h).
   std::optional<MltPath> propose(const MltPath& x, Uniforms& u) const;
@@ -84,7 +77,6 @@ class BidirectionalMutation {
  private:
   const PathContext* ctx_;
   int max_segments_;
-  BidirFault fault_;
 };
 
 }  // namespace tb::path_space

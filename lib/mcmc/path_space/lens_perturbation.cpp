@@ -8,8 +8,7 @@
 
 namespace tb::path_space {
 
-LensPerturbation::LensPerturbation(const PathContext& ctx, double r1, double r2, LensFault fault)
-    : ctx_(&ctx), r1_(r1), r2_(r2), fault_(fault) {
+LensPerturbation::LensPerturbation(const PathContext& ctx, double r1, double r2) : ctx_(&ctx), r1_(r1), r2_(r2) {
   const Camera& cam = ctx.world->camera();
   if (!(r2_ > 0.0)) r2_ = 0.1 * std::max(cam.width(), cam.height());
   if (!(r2_ > r1_)) r2_ = 2.0 * r1_;
@@ -96,7 +95,6 @@ double LensPerturbation::density(const MltPath& x, const MltPath& y) const {
   const auto rx = path_raster(*ctx_, x), ry = path_raster(*ctx_, y);
   if (!rx || !ry) return 0.0;
   const double kern = kernel_density(*ry - *rx);
-  if (fault_ == LensFault::kDropDensityRatio) return kern > 0.0 ? 1.0 : 0.0;
   return kern * raster_jacobian(y);
 }
 

@@ -31,16 +31,11 @@
 
 namespace tb::path_space {
 
-enum class LensFault {
-  kNone,
-  kDropDensityRatio,  // negative control: T stated as a constant, so a = min(1, f(y) / f(x))
-};
-
 class LensPerturbation {
  public:
   using State = MltPath;
   // r1, r2 in pixels; r2 <= 0: 10% of the larger image side.
-  LensPerturbation(const PathContext& ctx, double r1 = 0.1, double r2 = 0.0, LensFault fault = LensFault::kNone);
+  LensPerturbation(const PathContext& ctx, double r1 = 0.1, double r2 = 0.0);
 
   std::optional<MltPath> propose(const MltPath& x, Uniforms& u) const;
   double density(const MltPath& x, const MltPath& y) const;
@@ -63,7 +58,6 @@ class LensPerturbation {
  private:
   const PathContext* ctx_;
   double r1_, r2_;
-  LensFault fault_;
 };
 
 }  // namespace tb::path_space

@@ -1,18 +1,52 @@
 #include "lib/mcmc/path_space/mlt.h"
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
-#include "estimators/mcmc/acceptance.h"
-#include "estimators/mcmc/proposal_mixture.h"
+#include "estimators/mcmc/chain_step.h"
+#include "estimators/mcmc/metropolis_hastings.h"
 #include "lib/core/parallel.h"
 #include "lib/integrator/bdpt.h"
+#include "lib/integrator/pass_loop.h"
 #include "lib/mcmc/path_space/start_paths.h"
 
 namespace tb::path_space {
+
+namespace {
+
+// One chain on paths as the ScoredChain of chain_step.h: x with f(x) and pi(x) = Y(f(x)) cached,
+// the proposal y scored once when proposed.
+struct MltChain {
+  const PathMixture* mix = nullptr;
+  const PathTarget* target = nullptr;
+  MltPath x;
+  Rgb fx{0.0};
+  double pix = 0.0;
+  std::optional<MltPath> y;
+  Rgb fy{0.0};
+  double piy = 0.0;
+
+  int select(double v) const { return mix->select(x, v); }
+  bool propose(int k, Uniforms& u) {
+    y = mix->propose(k, x, u);
+    if (!y) return false;
+    fy = target->contribution(*y);
+    piy = std::max(0.0, luminance(fy));
+    return true;
+  }
+  mcmc::MoveTerms terms(int k) const { return mcmc::mixture_terms(*mix, k, x, *y, pix, piy); }
+  void accept() {
+    x = std::move(*y);
+    fx = fy;
+    pix = piy;
+  }
+  void reject() {}
+};
+
+}  // namespace
 
 MltStats run_mlt(const World& world, const RenderSettings& st, Film& film, const MltOptions& opt) {
   const Camera& cam = world.camera();
@@ -20,14 +54,11 @@ MltStats run_mlt(const World& world, const RenderSettings& st, Film& film, const
   const LightSampler sampler(world);
   const PathContext ctx{&world, &sampler};
   const int max_depth = std::max(0, st.max_depth);
-  const int max_segments = max_depth + 1;
   const PathTarget target{&ctx};
-  const BidirectionalMutation bidir(ctx, max_segments, opt.bidir_fault);
-  const LensPerturbation lens(ctx, 0.1, 0.0, opt.lens_fault);
-  const CausticPerturbation caustic(ctx);
-  const MultiChainPerturbation multi(ctx);
-  const mcmc::Mixture mixture(opt.selection, bidir, lens, caustic, multi);
-  constexpr int kComponents = 4;
+  PathMutationSettings ms;
+  ms.max_segments = max_depth + 1;
+  const PathMixture mixture(opt.mutations ? opt.mutations(ctx, ms) : make_path_mutations(ctx, ms));
+  const size_t K = static_cast<size_t>(mixture.components());
 
   const int64_t P = cam.pixel_count();
   const int64_t chains = std::max<int64_t>(1, st.passes);
@@ -35,17 +66,15 @@ MltStats run_mlt(const World& world, const RenderSettings& st, Film& film, const
   const int64_t n_boot = opt.bootstrap_per_chain > 0 ? opt.bootstrap_per_chain : std::max<int64_t>(256, 4 * P / chains);
 
   MltStats stats;
-  stats.mutations = {MutationStats{"bidirectional"}, MutationStats{"lens"}, MutationStats{"caustic"},
-                     MutationStats{"multi-chain"}};
+  for (int k = 0; k < mixture.components(); ++k) stats.mutations.push_back(MutationStats{mixture.name(k)});
   const auto t0 = std::chrono::steady_clock::now();
   const int64_t batch = 16;  // chains per parallel batch: bounds splat memory, independent of threads
   double b_sum = 0.0;
-  for (int64_t first = 0; first < chains; first += batch) {
-    if (st.interrupted && st.interrupted->load()) break;
-    const int64_t count = std::min(batch, chains - first);
+  for_each_pass_batch(st, chains, batch, [&](int64_t first, int64_t count) {
     std::vector<SplatBuffer> splats(static_cast<size_t>(count), SplatBuffer(film.width(), film.height()));
     std::vector<double> b(static_cast<size_t>(count), 0.0);
-    std::vector<std::array<MutationStats, kComponents>> local(static_cast<size_t>(count));
+    std::vector<std::vector<mcmc::ComponentCounts>> local(static_cast<size_t>(count),
+                                                          std::vector<mcmc::ComponentCounts>(K));
     std::vector<int64_t> done(static_cast<size_t>(count), 0);
     parallel_for(static_cast<size_t>(count), [&](size_t ci) {
       const uint64_t chain = static_cast<uint64_t>(first) + ci;
@@ -55,42 +84,24 @@ MltStats run_mlt(const World& world, const RenderSettings& st, Film& film, const
       ChainStart start = start_chain(ctx, st.seed, chain, n_boot, max_depth, u.next());
       b[ci] = start.b;
       if (!start.x) return;
-      MltPath x = std::move(*start.x);
-      Rgb fx = target.contribution(x);
-      double pix = std::max(0.0, luminance(fx));
-      auto splat = [&](const MltPath& p, const Rgb& f, double pi, double weight, uint64_t index) {
-        if (!(weight > 0.0) || !(pi > 0.0)) return;
-        const auto r = path_raster(ctx, p);
-        if (r) splats[ci].splat(*r, f * (weight / pi), index);
-      };
+      MltChain c;
+      c.mix = &mixture;
+      c.target = &target;
+      c.x = std::move(*start.x);
+      c.fx = target.contribution(c.x);
+      c.pix = std::max(0.0, luminance(c.fx));
       auto& ls = local[ci];
       for (int64_t j = 0; j < M; ++j) {
-        const int comp = std::max(0, mcmc::select_component(mixture, x, u.next()));
-        auto y = mixture.propose(comp, x, u);
-        const double ua = u.next();
-        ++ls[comp].proposed;
-        if (!y) {
-          ++ls[comp].failed;
-          splat(x, fx, pix, 1.0, static_cast<uint64_t>(j));
-          continue;
-        }
-        const Rgb fy = target.contribution(*y);
-        const double piy = std::max(0.0, luminance(fy));
-        double a = 0.0;
-        if (piy > 0.0) {  // the estimators' rule with the mutation's own densities
-          const double fwd = mixture.selection(comp, x) * mixture.density(comp, x, *y);
-          const double rev = mixture.selection(comp, *y) * mixture.density(comp, *y, x);
-          a = mcmc::HastingsRatio{}(pix, fwd, piy, rev);
-        }
-        ls[comp].acceptance_sum += a;
-        splat(x, fx, pix, 1.0 - a, static_cast<uint64_t>(j));  // expected values (Veach 1997, Sec. 11.5)
-        splat(*y, fy, piy, a, static_cast<uint64_t>(j));
-        if (ua < a) {
-          ++ls[comp].accepted;
-          x = std::move(*y);
-          fx = fy;
-          pix = piy;
-        }
+        const uint64_t index = static_cast<uint64_t>(j);
+        // Expected values (Veach 1997, Sec. 11.5): x with 1 - a, y with a, each splat f / Y(f).
+        const mcmc::StepOutcome o = mcmc::chain_step(c, u, u, [&](mcmc::Which which, double w) {
+          const bool cur = which == mcmc::Which::kCurrent;
+          const double pi = cur ? c.pix : c.piy;
+          if (!(pi > 0.0)) return;
+          const auto r = path_raster(ctx, cur ? c.x : *c.y);
+          if (r) splats[ci].splat(*r, (cur ? c.fx : c.fy) * (w / pi), index);
+        });
+        if (o.component >= 0) ls[static_cast<size_t>(o.component)].add(o);
       }
       done[ci] = M;
     });
@@ -101,19 +112,18 @@ MltStats run_mlt(const World& world, const RenderSettings& st, Film& film, const
       b_sum += b[ci];
       if (done[ci] == 0) ++stats.chains_without_start;
       stats.mutations_total += done[ci];
-      for (int j = 0; j < kComponents; ++j) {
-        stats.mutations[j].proposed += local[ci][j].proposed;
-        stats.mutations[j].failed += local[ci][j].failed;
-        stats.mutations[j].accepted += local[ci][j].accepted;
-        stats.mutations[j].acceptance_sum += local[ci][j].acceptance_sum;
+      for (size_t k = 0; k < K; ++k) {
+        const mcmc::ComponentCounts& lc = local[ci][k];
+        MutationStats& m = stats.mutations[k];
+        m.proposed += lc.proposed;
+        m.failed += lc.failed;
+        m.accepted += lc.accepted;
+        m.errors += lc.errors;
+        m.acceptance_sum += lc.acceptance_sum;
       }
       ++stats.chains;
     }
-    st.progress(static_cast<double>(stats.chains) / static_cast<double>(chains));
-    if (st.time_budget_s > 0 &&
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > st.time_budget_s)
-      break;
-  }
+  });
   stats.b_mean = stats.chains > 0 ? b_sum / static_cast<double>(stats.chains) : 0.0;
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return stats;

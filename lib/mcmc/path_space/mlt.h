@@ -4,10 +4,8 @@
 // the generic kernel of estimators/mcmc/ (Mixture, select_component, HastingsRatio): the
 // acceptance of a move by component j is
 //   min(1, pi(y) c_j(y) T_j(y -> x) / (pi(x) c_j(x) T_j(x -> y)))
-// with the T_j the mutations state, the same functions the detailed-balance checks evaluate.
-// Components: 0 bidirectional mutation, 1 lens, 2 caustic, 3 multi-chain perturbation, selected
-// with probabilities c_j(x) that depend on the path (MutationSelection), so the ratio
-// c_j(y) / c_j(x) enters the acceptance of moves that change the length or the specular structure.
+// with the T_j the mutations state and the terms of mcmc::mixture_terms, the same functions the
+// detailed-balance checks evaluate; c_j(x) depends on the path (path_mutations.h).
 //
 // Estimator (Veach 1997, Sec. 11.3): pixel j has I_j = P int h_j(r(x)) f(x) dmu(x) (P pixels,
 // whole-image camera normalisation, docs/camera.md) = P b E_pi[h_j f / Y(f)], b = int Y(f) dmu.
@@ -26,38 +24,23 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "lib/film/film.h"
 #include "lib/integrator/render_settings.h"
-#include "lib/mcmc/path_space/bidirectional_mutation.h"
-#include "lib/mcmc/path_space/caustic_perturbation.h"
-#include "lib/mcmc/path_space/lens_perturbation.h"
-#include "lib/mcmc/path_space/multi_chain_perturbation.h"
+#include "lib/mcmc/path_space/path_mutations.h"
 #include "lib/scene/world.h"
 
 namespace tb::path_space {
 
-// c_j(x): (p_bidir, p_lens, p_caustic, p_multi) normalised, with p_caustic = 0 for paths of fewer
-// than two segments (where the caustic perturbation cannot act) and p_multi = 0 for paths without
-// the multi-chain structure (multi_chain_levels empty).
-struct MutationSelection {
-  double p_bidir = 0.4, p_lens = 0.3, p_caustic = 0.3, p_multi = 0.2;
-  double operator()(int j, const MltPath& x) const {
-    const double pc = x.segments() >= 2 ? p_caustic : 0.0;
-    const double pm = p_multi > 0.0 && !multi_chain_levels(x).empty() ? p_multi : 0.0;
-    const double sum = p_bidir + p_lens + pc + pm;
-    return (j == 0 ? p_bidir : j == 1 ? p_lens : j == 2 ? pc : pm) / sum;
-  }
-};
-
 struct MltOptions {
-  MutationSelection selection;
+  // The mutations of the chains, built for the driver's path context; empty: every registered one
+  // (path_mutations.h) with its default weight. Negative controls (validate/) build broken
+  // wrappers of the registered ones here.
+  std::function<PathMutationList(const PathContext&, const PathMutationSettings&)> mutations;
   int64_t bootstrap_per_chain = 0;  // 0: max(256, 4 P / chains)
-  // Deliberate errors for the negative controls of the image checks (never set by `tb render`).
-  BidirFault bidir_fault = BidirFault::kNone;
-  LensFault lens_fault = LensFault::kNone;
 };
 
 struct MutationStats {
@@ -65,12 +48,13 @@ struct MutationStats {
   int64_t proposed = 0;     // times selected
   int64_t failed = 0;       // proposals that returned nothing (the chain stays)
   int64_t accepted = 0;
+  int64_t errors = 0;           // moves with a stated forward density of 0 or non-finite terms
   double acceptance_sum = 0.0;  // sum of a over proposals
   double acceptance_rate() const { return proposed > 0 ? static_cast<double>(accepted) / proposed : 0.0; }
 };
 
 struct MltStats {
-  std::vector<MutationStats> mutations;  // bidirectional, lens, caustic, multi-chain
+  std::vector<MutationStats> mutations;  // per mutation of the run, in its order
   int64_t chains = 0, mutations_total = 0, chains_without_start = 0;
   double b_mean = 0.0;      // mean of the chains' b_c
   double seconds = 0.0;

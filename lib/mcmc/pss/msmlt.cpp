@@ -1,5 +1,7 @@
 #include "lib/mcmc/pss/msmlt.h"
 
+#include "lib/integrator/pass_loop.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -136,9 +138,7 @@ int64_t run_msmlt(const SampleFunction& f, const RenderSettings& st, const PssSe
           : std::max<int64_t>(64 * coarse_pixels, std::llround(ms.stage_budget * static_cast<double>(N) /
                                                                static_cast<double>(FK * FK)));
   MultiStageStats total;
-  int64_t done = 0;
-  for (int64_t pass = 0; pass < passes; ++pass) {
-    if (st.interrupted && st.interrupted->load()) break;
+  const int64_t done = for_each_pass_batch(st, passes, 1, [&](int64_t pass, int64_t) {
     const uint64_t pass_seed = hash_values(st.seed, kStageKey, static_cast<uint64_t>(pass));
     // Stage K: independent estimate on the coarsest grid.
     auto guide = std::make_shared<GuideImage>(
@@ -153,6 +153,8 @@ int64_t run_msmlt(const SampleFunction& f, const RenderSettings& st, const PssSe
       sk.seed = hash_values(pass_seed, static_cast<uint64_t>(k));
       sk.progress = [](double) {};
       sk.time_budget_s = 0;
+      sk.first_pass = 0;
+      sk.pass_count = -1;
       sk.report = nullptr;
       PssSettings pk = pss;
       const int64_t area = ipow(B, 2 * k);
@@ -163,7 +165,7 @@ int64_t run_msmlt(const SampleFunction& f, const RenderSettings& st, const PssSe
       pk.bootstrap = std::max<int64_t>(2 * pss.chains, pss.bootstrap_for(N, f.levels) / area);
       pk.count_visits = false;
       pk.print_stats = false;
-      pk.fault = PssFault::kNone;  // the negative controls break the film's stage only
+      pk.splat_weight = {};  // a negative control's splat weight breaks the film's stage only
       pk.target = [g = guide](const std::vector<Splat>& s) { return g->target(s); };
       PssStats sst;
       run_pss(f, sk, pk, tmp, &sst);
@@ -177,6 +179,8 @@ int64_t run_msmlt(const SampleFunction& f, const RenderSettings& st, const PssSe
     s0.seed = hash_values(pass_seed, uint64_t{0});
     s0.progress = [](double) {};
     s0.time_budget_s = 0;
+    s0.first_pass = 0;
+    s0.pass_count = -1;
     s0.report = nullptr;
     PssSettings p0 = pss;
     p0.print_stats = false;
@@ -185,12 +189,7 @@ int64_t run_msmlt(const SampleFunction& f, const RenderSettings& st, const PssSe
     run_pss(f, s0, p0, film, &fst);
     total.final_stage.add(fst);
     total.last_guide = *guide;
-    ++done;
-    st.progress(static_cast<double>(done) / static_cast<double>(passes));
-    if (st.time_budget_s > 0 &&
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > st.time_budget_s)
-      break;
-  }
+  });
   total.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (pss.print_stats) {
     fmt::print(stderr, "msmlt film stage: {}\n", total.final_stage.message());
@@ -232,8 +231,7 @@ int64_t render_msmlt_mmlt(const World& world, const RenderSettings& settings, co
                           const pss::MultiStageSettings& ms, Film& film, pss::MultiStageStats* stats) {
   const LightSampler sampler(world);
   const PathContext ctx{&world, &sampler};
-  const pss::SampleFunction f = pss::mmlt_sample_function(ctx, film.width(), film.height(), settings.max_depth,
-                                                          p.fault != pss::PssFault::kNoTechniqueCount);
+  const pss::SampleFunction f = pss::mmlt_sample_function(ctx, film.width(), film.height(), settings.max_depth);
   return pss::run_msmlt(f, settings, p, ms, film, stats);
 }
 

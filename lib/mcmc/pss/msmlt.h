@@ -26,8 +26,8 @@
 // is unbiased for any guide. The guide is built from randomness independent of the final stage's,
 // so the film pass is unbiased unconditionally; the earlier stages only shape pi and are not added
 // to the film (Hoberock & Hart combine them; we keep the estimate that is provably unbiased).
-// The negative control PssFault::kSplatThroughput splats v / Y(sum v) instead of v / pi: the
-// image is then the PSSMLT estimator of a wrongly weighted distribution (biased towards dark pixels).
+// The negative control "splat throughput" (validate/render/broken_pss.h, a PssSettings::splat_weight)
+// splats v / Y(sum v) instead of v / pi: the image is then the PSSMLT estimator of a wrongly weighted distribution (biased towards dark pixels).
 //
 // Cost: stage k makes stage_budget * N / B^(2k) mutations (the same mutations per pixel of its own
 // resolution, Hoberock & Hart), about N / 3 extra for B = 2; plus a bootstrap of bootstrap / B^(2k)

@@ -1,5 +1,6 @@
 #include "lib/mcmc/pss/pss_driver.h"
 
+#include "lib/integrator/pass_loop.h"
 #include "lib/integrator/path_tracer.h"
 
 #include <algorithm>
@@ -20,9 +21,10 @@ namespace pss {
 
 std::string PssStats::message() const {
   return fmt::format("{} mutations in {:.2f} s ({:.3g} /s in the mutation phase); acceptance: large step {:.3f} ({} of {}), small step "
-                     "{:.3f} ({} of {}); {} bootstrap samples, b = {:.6g} (last pass); {} non-finite targets",
+                     "{:.3f} ({} of {}); {} bootstrap samples, b = {:.6g} (last pass); {} non-finite targets; {} step errors",
                      mutations, seconds, mutations_per_second(), large_acceptance(), large_accepted, large_proposed,
-                     small_acceptance(), small_accepted, small_proposed, bootstrap_samples, last_b, nonfinite);
+                     small_acceptance(), small_accepted, small_proposed, bootstrap_samples, last_b, nonfinite,
+                     step_errors);
 }
 
 double PssStats::visits_cv() const {
@@ -43,11 +45,34 @@ void PssStats::add(const PssStats& o) {
   bootstrap_samples += o.bootstrap_samples;
   zero_passes += o.zero_passes;
   nonfinite += o.nonfinite;
+  step_errors += o.step_errors;
+  for (const auto& [name, c] : o.components) {
+    auto it = std::find_if(components.begin(), components.end(), [&](const auto& e) { return e.first == name; });
+    if (it == components.end())
+      components.push_back({name, c});
+    else
+      it->second.merge(c);
+  }
   seconds += o.seconds;
   mutation_seconds += o.mutation_seconds;
   last_b = o.last_b;
   if (visits.size() < o.visits.size()) visits.resize(o.visits.size(), 0.0);
   for (size_t i = 0; i < o.visits.size(); ++i) visits[i] += o.visits[i];
+}
+
+PssStepSettings PssSettings::step_settings() const {
+  PssStepSettings s;
+  s.large_step_probability = large_step_probability;
+  s.sigma = sigma;
+  s.exponent = rescale.exponent;
+  s.sigma_min = rescale.sigma_min;
+  s.sigma_max = rescale.sigma_max;
+  return s;
+}
+
+PssMutationList PssSettings::mutation_list() const {
+  if (!mutations.empty()) return mutations;
+  return make_pss_mutations({"large step", rescale.enabled ? "rescaled small step" : "small step"}, step_settings());
 }
 
 std::vector<double> expected_visits(const std::vector<Rgb>& image, int64_t mutations) {
@@ -66,15 +91,16 @@ constexpr uint64_t kChainKey = hash_string("pss.chain.decisions");
 constexpr uint64_t kStateKey = hash_string("pss.chain.uniforms");
 constexpr uint64_t kPilotKey = hash_string("pss.pilot");
 
+// A chain of a pass: the lazily updated state, its current splats (scored: I(x) cached) and the
+// proposal slot, as the ScoredChain of estimators/mcmc/chain_step.h.
 struct Chain {
   PssState state{Rng(), 0.01};
   Rng control;
   int level = 0;
   std::vector<Splat> current, proposed;
-  double i_current = 0.0;
-  double y_current = 0.0;      // target_value of the current splats (kSplatThroughput control)
-  double sigma_current = 0.0;  // rescaled small step: sigma(x)
-  double y_ref = 0.0;          // rescaled small step: Y_ref = b of the chain's group
+  double i_current = 0.0, i_proposed = 0.0;
+  std::array<size_t, kStreams> reads_current{};  // D(x) of the current state
+  double y_ref = 0.0;          // Y_ref of a rescaled step: b of the chain's group
   std::vector<std::pair<uint32_t, double>> where;  // visit counts: the current state's pixel shares
   std::vector<double> visits;
   int width = 0, height = 0;   // of the film (visit counts)
@@ -82,6 +108,19 @@ struct Chain {
   int64_t remaining = 0;
   uint64_t next_index = 0;  // sample index of the next mutation in the film's logs
   PssStats stats;
+  std::vector<mcmc::ComponentCounts> counts;
+  // Set per pass by the driver.
+  const SampleFunction* f = nullptr;
+  const PssSettings* pss = nullptr;
+  const PssMutationList* mutations = nullptr;
+  double scale_x = 0.0;  // the selected mutation's scale at x
+
+  // ---- ScoredChain -------------------------------------------------------------------------------
+  int select(double v) const { return select_mutation(*mutations, v); }
+  bool propose(int k, Uniforms&);
+  mcmc::MoveTerms terms(int k) const;
+  void accept();
+  void reject() { state.reject(); }
 };
 
 // Evaluates the sample function. A non-finite target sets *nonfinite (the caller counts it) and
@@ -126,53 +165,49 @@ void visit_weights(const std::vector<Splat>& splats, const TargetFunction& targe
   for (auto& [pixel, w] : *out) w /= total;
 }
 
-// One mutation of a chain: propose, accept or reject, splat expected values.
-void mutate(const SampleFunction& f, const PssSettings& pss, Chain& c, SplatBuffer& buffer) {
-  const bool large = c.control.uniform() < pss.large_step_probability;
-  const bool rescaled = pss.rescale.enabled && !large;
-  c.state.start_iteration(large, c.sigma_current);
+bool Chain::propose(int k, Uniforms&) {
+  const PssMutation& m = *(*mutations)[static_cast<size_t>(k)];
+  scale_x = m.scale(i_current, y_ref);
+  m.begin(state, scale_x);
   bool nonfinite = false;
-  const double i_prop = evaluate(f, pss.target, c.level, c.state, &c.proposed, &nonfinite);
-  c.stats.nonfinite += nonfinite;
-  // The large step and the fixed small step are symmetric (pss_state.h): T cancels in the ratio.
-  // The rescaled small step is not: T(y -> x) / T(x -> y) over D(x) ∩ D(y) (rescaled_step.h).
-  double reverse_over_forward = 1.0, sigma_prop = 0.0;
-  if (pss.rescale.enabled && i_prop > 0.0) {
-    sigma_prop = pss.rescale.sigma(pss.sigma, c.y_ref, i_prop);
-    if (rescaled && pss.fault != PssFault::kNoProposalRatio)
-      reverse_over_forward = std::exp(c.state.log_small_step_ratio(c.sigma_current, sigma_prop));
-  }
-  const double a = mcmc::HastingsRatio{}(c.i_current, 1.0, i_prop, reverse_over_forward);
-  // kSplatThroughput: the splat weight 1 / Y(f) instead of 1 / pi (differs only for custom targets).
-  const bool throughput = pss.fault == PssFault::kSplatThroughput;
-  const double y_prop = throughput && i_prop > 0.0 ? target_value(c.proposed) : i_prop;
-  mcmc::Transition<const std::vector<Splat>*, int> t;
-  t.current = &c.current;
-  t.move = 0;
-  t.proposed = &c.proposed;
-  t.acceptance = a;
+  i_proposed = evaluate(*f, pss->target, level, state, &proposed, &nonfinite);
+  stats.nonfinite += nonfinite;
+  return true;  // a PSS proposal never fails (a zero target is rejected by the rule)
+}
+
+mcmc::MoveTerms Chain::terms(int k) const {
+  const PssMutation& m = *(*mutations)[static_cast<size_t>(k)];
+  LazyPssMove mv(state);
+  mv.reads_x = reads_current;
+  mv.reads_y = state.reads();
+  mv.sigma_x = scale_x;
+  mv.sigma_y = i_proposed > 0.0 ? m.scale(i_proposed, y_ref) : 0.0;
+  return pss_move_terms(m, selection_probability(*mutations, k), i_current, i_proposed, mv);
+}
+
+void Chain::accept() {
+  state.accept();
+  reads_current = state.current_reads();
+  std::swap(current, proposed);
+  i_current = i_proposed;
+  if (!visits.empty()) visit_weights(current, pss->target, width, height, &where);
+}
+
+// One mutation of a chain: the one step of estimators/mcmc/chain_step.h, splatting expected values.
+void mutate(Chain& c, SplatBuffer& buffer) {
   const uint64_t index = c.next_index++;
-  mcmc::splat_expected(t, [&](const std::vector<Splat>* s, double w) {
-    if (s == &c.current) {
-      if (pss.fault == PssFault::kNoRejectedSplat) return;
-      splat_all(buffer, c.current, c.scale * w / (throughput ? c.y_current : c.i_current), index);
-    } else {
-      splat_all(buffer, c.proposed, c.scale * w / (throughput ? y_prop : i_prop), index);
-    }
+  RngUniforms decisions(c.control);
+  const PssSettings& pss = *c.pss;
+  const mcmc::StepOutcome o = mcmc::chain_step(c, decisions, decisions, [&](mcmc::Which which, double w) {
+    const bool cur = which == mcmc::Which::kCurrent;
+    const std::vector<Splat>& splats = cur ? c.current : c.proposed;
+    const double pi = cur ? c.i_current : c.i_proposed;
+    if (!(pi > 0.0)) return;  // nothing to splat (the chain's start found no contribution)
+    const double factor = pss.splat_weight ? pss.splat_weight(which, w, pi, splats) : w / pi;
+    splat_all(buffer, splats, c.scale * factor, index);
   });
-  const bool accepted = c.control.uniform() < a;
-  (large ? c.stats.large_proposed : c.stats.small_proposed)++;
-  if (accepted) {
-    (large ? c.stats.large_accepted : c.stats.small_accepted)++;
-    c.state.accept();
-    std::swap(c.current, c.proposed);
-    c.i_current = i_prop;
-    c.y_current = y_prop;
-    c.sigma_current = sigma_prop;
-    if (!c.visits.empty()) visit_weights(c.current, pss.target, c.width, c.height, &c.where);
-  } else {
-    c.state.reject();
-  }
+  if (o.component >= 0) c.counts[static_cast<size_t>(o.component)].add(o);
+  c.stats.step_errors += o.status == mcmc::MoveStatus::kZeroForward || o.status == mcmc::MoveStatus::kNonFinite;
   for (const auto& [pixel, w] : c.where) c.visits[pixel] += w;
   ++c.stats.mutations;
 }
@@ -208,8 +243,9 @@ std::vector<LevelPlan> plan_levels(const std::vector<double>& pilot_b, int64_t N
 
 }  // namespace
 
-int64_t run_pss(const SampleFunction& f, const RenderSettings& st, const PssSettings& pss, Film& film,
+int64_t run_pss(const SampleFunction& f_in, const RenderSettings& st, const PssSettings& pss, Film& film,
                 PssStats* stats_out) {
+  const SampleFunction f = pss.wrap_sample ? pss.wrap_sample(f_in) : f_in;
   const auto t0 = std::chrono::steady_clock::now();
   const int64_t P = film.pixel_count();
   const int64_t passes = std::max<int64_t>(1, st.passes);
@@ -220,7 +256,9 @@ int64_t run_pss(const SampleFunction& f, const RenderSettings& st, const PssSett
   const int64_t boot_n = per_level * levels;
   const int64_t segment = std::max<int64_t>(1, pss.segment);
   const bool resample = pss.resample_levels || levels == 1;
+  const PssMutationList mutations = pss.mutation_list();
   PssStats total;
+  for (const auto& m : mutations) total.components.push_back({m->name(), {}});
   if (pss.count_visits) total.visits.assign(static_cast<size_t>(P), 0.0);
   std::vector<double> boot(static_cast<size_t>(boot_n)), cdf(static_cast<size_t>(boot_n));
   std::vector<uint8_t> boot_nonfinite(static_cast<size_t>(boot_n));
@@ -258,9 +296,7 @@ int64_t run_pss(const SampleFunction& f, const RenderSettings& st, const PssSett
   for (const LevelPlan& p : plan) C += p.chains;
   std::vector<Chain> chains(static_cast<size_t>(C));
   std::vector<SplatBuffer> buffers(static_cast<size_t>(C), SplatBuffer(film.width(), film.height()));
-  int64_t done = 0;
-  for (int64_t pass = 0; pass < passes; ++pass) {
-    if (st.interrupted && st.interrupted->load()) break;
+  const int64_t done = for_each_pass_batch(st, passes, 1, [&](int64_t pass, int64_t) {
     // 1. Bootstrap: b_l = mean of I over the level's samples (Kelemen 2002, Sec. 5.2).
     const uint64_t boot_base = static_cast<uint64_t>(pass * boot_n);
     const std::vector<double> b_level = bootstrap(kBootstrapKey, boot_base);
@@ -288,6 +324,10 @@ int64_t run_pss(const SampleFunction& f, const RenderSettings& st, const PssSett
         const uint64_t gc = static_cast<uint64_t>(pass * C) + ci;
         c.control = Rng::for_sample(st.seed, kChainKey, gc);
         c.stats = {};
+        c.counts.assign(mutations.size(), {});
+        c.f = &f;
+        c.pss = &pss;
+        c.mutations = &mutations;
         c.visits.clear();
         c.where.clear();
         c.width = film.width();
@@ -305,16 +345,14 @@ int64_t run_pss(const SampleFunction& f, const RenderSettings& st, const PssSett
         const int64_t j = std::min<int64_t>(it - cdf.begin(), hi - 1);
         c.level = static_cast<int>(j / per_level);
         c.state = PssState(Rng::for_sample(st.seed, kBootstrapKey, boot_base + static_cast<uint64_t>(j)), pss.sigma);
-        c.state.set_rescaled(pss.rescale.enabled);
         bool nonfinite = false;  // sample j was finite in the bootstrap: regenerated exactly
         c.i_current = evaluate(f, pss.target, c.level, c.state, &c.current, &nonfinite);
         c.state.commit_reads();
+        c.reads_current = c.state.current_reads();
         c.state.set_rng(Rng::for_sample(st.seed, kStateKey, gc));
-        c.y_current = pss.fault == PssFault::kSplatThroughput ? target_value(c.current) : c.i_current;
         // Y_ref of the rescaled step: b of the group per level (b_group / levels would do as well;
         // any fixed positive value keeps the kernel valid).
         c.y_ref = b_group;
-        c.sigma_current = pss.rescale.enabled ? pss.rescale.sigma(pss.sigma, c.y_ref, c.i_current) : 0.0;
         if (pss.count_visits) {
           c.visits.assign(static_cast<size_t>(P), 0.0);
           visit_weights(c.current, pss.target, film.width(), film.height(), &c.where);
@@ -328,7 +366,7 @@ int64_t run_pss(const SampleFunction& f, const RenderSettings& st, const PssSett
         Chain& c = chains[ci];
         SplatBuffer& buf = buffers[ci];
         buf.clear();
-        for (int64_t m = 0; m < segment && c.remaining > 0; ++m, --c.remaining) mutate(f, pss, c, buf);
+        for (int64_t m = 0; m < segment && c.remaining > 0; ++m, --c.remaining) mutate(c, buf);
       });
       more = false;
       for (int64_t ci = 0; ci < C; ++ci) {
@@ -338,22 +376,20 @@ int64_t run_pss(const SampleFunction& f, const RenderSettings& st, const PssSett
     }
     total.mutation_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - tm).count();
     for (const Chain& c : chains) {
-      total.large_proposed += c.stats.large_proposed;
-      total.large_accepted += c.stats.large_accepted;
-      total.small_proposed += c.stats.small_proposed;
-      total.small_accepted += c.stats.small_accepted;
+      for (size_t k = 0; k < c.counts.size() && k < mutations.size(); ++k) {
+        total.components[k].second.merge(c.counts[k]);
+        const bool large = mutations[k]->independent();
+        (large ? total.large_proposed : total.small_proposed) += c.counts[k].proposed;
+        (large ? total.large_accepted : total.small_accepted) += c.counts[k].accepted;
+      }
+      total.step_errors += c.stats.step_errors;
       total.mutations += c.stats.mutations;
       total.nonfinite += c.stats.nonfinite;
       for (size_t i = 0; i < c.visits.size(); ++i) total.visits[i] += c.visits[i];
     }
     // 4. The splats carry their group's scale P b / N already.
     film.end_pass(1.0);
-    ++done;
-    st.progress(static_cast<double>(done) / static_cast<double>(passes));
-    if (st.time_budget_s > 0 &&
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > st.time_budget_s)
-      break;
-  }
+  });
   total.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (pss.print_stats) fmt::print(stderr, "{}\n", total.message());
   if (stats_out) *stats_out = total;
@@ -366,8 +402,9 @@ namespace pss {
 
 void fill_report(const PssStats& s, RunReport* report, const char* small_step_name) {
   if (!report) return;
-  report->mutations = {{"large step", s.large_proposed, s.large_accepted},
-                       {small_step_name, s.small_proposed, s.small_accepted}};
+  (void)small_step_name;
+  report->mutations.clear();
+  for (const auto& [name, c] : s.components) report->mutations.push_back({name, c.proposed, c.accepted});
   report->mutations_total = s.mutations;
   report->mutations_per_second = s.mutations_per_second();
 }
@@ -396,8 +433,7 @@ int64_t render_mmlt(const World& world, const RenderSettings& settings, const ps
                     pss::PssStats* stats) {
   const LightSampler sampler(world);
   const PathContext ctx{&world, &sampler};
-  const pss::SampleFunction f = pss::mmlt_sample_function(ctx, film.width(), film.height(), settings.max_depth,
-                                                          p.fault != pss::PssFault::kNoTechniqueCount);
+  const pss::SampleFunction f = pss::mmlt_sample_function(ctx, film.width(), film.height(), settings.max_depth);
   return pss::run_pss(f, settings, p, film, stats);
 }
 

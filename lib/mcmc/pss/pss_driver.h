@@ -14,16 +14,17 @@
 //      mutations N_l fixed by an independent pilot bootstrap before the first pass (0.9 b_l / b +
 //      0.1 / levels), each set resampling within its level; or, with resample_levels, pbrt-v3's
 //      rule (each chain draws its level with its start from the joint bootstrap);
-//   3. each chain makes its share of the mutations: a large step with probability p_large, else a
-//      small step (pss_state.h), accepted with the Metropolis-Hastings rule of
-//      estimators/mcmc/acceptance.h (both steps are symmetric, T cancels); the proposed and the
-//      current state are both splatted with weights a and 1 - a (estimators/mcmc/kernel_step.h,
-//      splat_expected), each splat value v divided by I and multiplied by its group's
+//   3. each chain makes its share of the mutations with the one step of estimators/mcmc/
+//      chain_step.h over the registered mutations (pss_mutation.h; default: the large step with
+//      probability p_large, else the small step), accepted by mcmc::decide with the Hastings terms of
+//      pss_move_terms (the large and the fixed small step are symmetric; the rescaled small step is
+//      not, and carries its T ratio); the proposed and the current state are both splatted with
+//      weights a and 1 - a, each splat value v divided by I and multiplied by its group's
 //      P b_group / N_group (P pixels; derivation in docs/mlt-pss.md, "Normalisation");
 //   4. end_pass(1): the splats carry their scale.
 // Options: a custom target pi (PssSettings::target; splats are then v / pi, b = mean of pi, used by
-// the multi-stage driver msmlt.h) and the rescaled small step (PssSettings::rescale, rescaled_step.h:
-// sigma(x) from pi(x), acceptance with the ratio T(y -> x) / T(x -> y) of PssState::log_small_step_ratio).
+// the multi-stage driver msmlt.h), the rescaled small step (PssSettings::rescale), or any list of
+// registered mutations (PssSettings::mutations).
 //
 // Determinism: bootstrap sample j of pass p uses Rng::for_sample(seed, key_bootstrap, p * L * M
 // + j); chain c of pass p uses Rng::for_sample(seed, key_chain, p * C + c) for its decisions and
@@ -39,26 +40,32 @@
 
 #include "lib/film/film.h"
 #include "lib/integrator/render_settings.h"
+#include "estimators/mcmc/chain_step.h"
+#include "lib/mcmc/pss/pss_mutation.h"
 #include "lib/mcmc/pss/pss_sample.h"
-#include "lib/mcmc/pss/rescaled_step.h"
 #include "lib/scene/world.h"
 
 namespace tb {
 
 namespace pss {
 
-// Deliberate errors for the negative controls (never set by `tb render`).
-enum class PssFault {
-  kNone,
-  kNoRejectedSplat,  // expected-value splatting without the (1 - a) splat of the current state
-  kNoTechniqueCount, // MMLT without the factor k + 1 (number of techniques) in the target
-  kNoProposalRatio,  // rescaled small step accepted without T(y -> x) / T(x -> y)
-  kSplatThroughput,  // splats f / Y(f) instead of f / pi (a custom target forgetting its weight)
-};
-
 // The chain's scalar target pi(u) from the splats of a state (empty: target_value, the luminance
 // of the sum). Any pi > 0 wherever a splat is non-zero keeps the estimator unbiased (msmlt.h).
 using TargetFunction = std::function<double(const std::vector<Splat>&)>;
+
+// The factor a state's splat values are multiplied by before the group scale P b / N: given which
+// state (current or proposed), its expected-value weight w, its target pi and its splats. Empty
+// (the estimator): w / pi. Only negative controls (validate/) set it.
+using SplatWeight = std::function<double(mcmc::Which, double w, double pi, const std::vector<Splat>&)>;
+
+// Small-step rescaling by the current target value (the "rescaled small step" of pss_steps.h):
+// sigma(x) = clamp(sigma0 (Y_ref / Y(x))^kappa, sigma_min, sigma_max), Y_ref = b of the pass.
+struct StepRescaling {
+  bool enabled = false;
+  double exponent = 1.0;     // kappa: sigma inversely proportional to Y (Zirr 2020, Sec. 8)
+  double sigma_min = 1e-4;   // keeps the step above the double resolution of wrapped Gaussians
+  double sigma_max = 0.1;    // beyond ~0.3 the wrapped Gaussian is nearly uniform: a large step
+};
 
 struct PssSettings {
   double large_step_probability = 0.3;  // Kelemen et al. 2002, Sec. 5.3 (pbrt-v3 default 0.3)
@@ -71,10 +78,19 @@ struct PssSettings {
   // by a pilot bootstrap (stratified over levels; docs/mlt-pss.md). true: as pbrt-v3, every
   // chain draws its level with its start from the joint bootstrap distribution.
   bool resample_levels = false;
-  PssFault fault = PssFault::kNone;
+  // The mutations (pss_mutation.h). Empty: the registered "large step" with probability
+  // large_step_probability and "small step" (or, with rescale.enabled, "rescaled small step").
+  PssMutationList mutations;
+  SplatWeight splat_weight;             // empty: the estimator's w / pi (negative controls only)
+  // Wraps the sample function the driver runs (negative controls only: a broken variant of the
+  // real one, validate/render/broken_pss.h).
+  std::function<SampleFunction(const SampleFunction&)> wrap_sample;
   bool print_stats = false;             // acceptance rates and mutations/s to stderr
   // Small-step sigma rescaled by the current target value (rescaled_step.h), Y_ref = b of the pass.
   StepRescaling rescale;
+  // The settings of the registered mutations, and the list they make (mutations, when set).
+  PssStepSettings step_settings() const;
+  PssMutationList mutation_list() const;
   // The bootstrap of a pass of N mutations: `bootstrap` when set, else N / 2 (one level; b's
   // error is common to all pixels, so it only has to stay below a pixel's, which sees ~N / P
   // mutations) or 2 N (MMLT: per-level targets have a larger relative variance), clamped to
@@ -90,12 +106,16 @@ struct PssSettings {
 };
 
 struct PssStats {
+  // Per mutation (in the order of the list the driver ran): its name and counts.
+  std::vector<std::pair<std::string, mcmc::ComponentCounts>> components;
+  // Sums over the independent (large) and the other mutations, for the report.
   int64_t large_proposed = 0, large_accepted = 0;
   int64_t small_proposed = 0, small_accepted = 0;
   int64_t mutations = 0;
   int64_t bootstrap_samples = 0;
   int64_t zero_passes = 0;  // passes whose bootstrap found no contribution (b = 0)
   int64_t nonfinite = 0;    // states whose target I was NaN or infinite (read as I = 0, never splatted)
+  int64_t step_errors = 0;  // moves whose Hastings terms were not finite or whose forward density was 0
   double seconds = 0.0;     // wall time of the whole run, bootstrap included
   double mutation_seconds = 0.0;  // wall time of the chains' mutations only
   double last_b = 0.0;      // b of the last pass

@@ -51,12 +51,11 @@ SampleFunction bdpt_sample_function(const PathContext& ctx, int width, int heigh
   return f;
 }
 
-SampleFunction mmlt_sample_function(const PathContext& ctx, int width, int height, int max_depth,
-                                    bool technique_count) {
+SampleFunction mmlt_sample_function(const PathContext& ctx, int width, int height, int max_depth) {
   max_depth = std::max(0, max_depth);
   SampleFunction f;
   f.levels = max_depth + 1;  // k = 1 .. max_depth + 1 segments
-  f.sample = [ctx, width, height, technique_count](int level, StreamUniforms& u, std::vector<Splat>* out) {
+  f.sample = [ctx, width, height](int level, StreamUniforms& u, std::vector<Splat>* out) {
     thread_local std::vector<PathVertex> cam, light;
     const int k = level + 1, techniques = k + 1;
     u.use_stream(kConnectionStream);
@@ -71,7 +70,7 @@ SampleFunction mmlt_sample_function(const PathContext& ctx, int width, int heigh
     u.use_stream(kConnectionStream);
     const Connection c = connect_bdpt(ctx, light, cam, s, t, u);
     if (is_black(c.value)) return;
-    const Rgb v = c.value * (technique_count ? static_cast<double>(techniques) : 1.0);
+    const Rgb v = c.value * static_cast<double>(techniques);
     out->push_back({t == 1 ? c.raster : raster, v});
   };
   return f;

@@ -49,9 +49,7 @@ SampleFunction bdpt_sample_function(const PathContext& ctx, int width, int heigh
 // subpath must have exactly t vertices and the light subpath exactly s. The splat is the MIS-
 // weighted contribution of that technique times the number of techniques, k + 1, so that its
 // expectation over s is the sum over all techniques (the BDPT estimate of paths of length k).
-// `technique_count` replaces k + 1 by 1 (a negative control: then the image is too dark).
-SampleFunction mmlt_sample_function(const PathContext& ctx, int width, int height, int max_depth,
-                                    bool technique_count = true);
+SampleFunction mmlt_sample_function(const PathContext& ctx, int width, int height, int max_depth);
 
 // A radiance estimator L(raster, u) seen as a sample function: raster from the first two camera-
 // stream uniforms, the estimator reads the camera stream afterwards. For PSSMLT over the path

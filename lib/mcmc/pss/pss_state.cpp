@@ -26,6 +26,16 @@ double wrap01(double x) {
 
 PssState::PssState(Rng rng, double sigma) : rng_(rng), sigma_(sigma) {}
 
+PssState PssState::at(const std::vector<double>& u, Rng rng, double sigma) {
+  PssState s(rng, sigma);
+  s.x_.resize(u.size());
+  for (size_t i = 0; i < u.size(); ++i) {
+    s.x_[i].value = u[i];
+    s.x_[i].modified = 0;  // current at iteration 0 (= last_large_): never redrawn as stale
+  }
+  return s;
+}
+
 void PssState::start_iteration(bool large_step, double sigma_shared) {
   ++iteration_;
   large_ = large_step;
@@ -36,21 +46,6 @@ void PssState::start_iteration(bool large_step, double sigma_shared) {
 void PssState::accept() {
   if (large_) last_large_ = iteration_;
   commit_reads();
-}
-
-double PssState::log_small_step_ratio(double sigma_x, double sigma_y) const {
-  double log_ratio = 0.0;
-  for (int s = 0; s < kStreams; ++s) {
-    const size_t shared = std::min(current_reads_[static_cast<size_t>(s)], index_[static_cast<size_t>(s)]);
-    for (size_t j = 0; j < shared; ++j) {
-      // In D(x) ∩ D(y): modified in this iteration, backup_value is x_i (x read it at iteration n,
-      // so it carried no pending steps), value is y_i. g is even, so one difference serves both.
-      const Coordinate& c = x_[j * kStreams + static_cast<size_t>(s)];
-      const double d = c.value - c.backup_value;
-      log_ratio += std::log(wrapped_normal_pdf(d, sigma_y)) - std::log(wrapped_normal_pdf(d, sigma_x));
-    }
-  }
-  return log_ratio;
 }
 
 void PssState::reject() {

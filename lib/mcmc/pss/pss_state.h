@@ -68,6 +68,9 @@ class PssState final : public StreamUniforms {
  public:
   // rng: the stream of fresh uniforms and Gaussian perturbations; sigma: the small-step scale.
   PssState(Rng rng, double sigma);
+  // The state at a given point u (every coordinate current at iteration 0): the dense form of the
+  // mutations (pss_kernel.h) runs the same lazy updates from it.
+  static PssState at(const std::vector<double>& u, Rng rng, double sigma);
 
   // Starts proposing: iteration n + 1 with a large or a small step. Rewinds the streams.
   // sigma_shared: the rescaled small step's sigma(x) for D(x) ∩ D(y) (ignored unless rescaled).
@@ -80,9 +83,9 @@ class PssState final : public StreamUniforms {
   void commit_reads() { current_reads_ = index_; }
   // Rescaled small step (see the top of this file). While proposing y (after evaluating it):
   //   log T(y -> x) / T(x -> y) = sum_{i in D(x) ∩ D(y)} log g_{sigma_y}(x_i - y_i) - log g_{sigma_x}(y_i - x_i).
+  // (The ratio itself is the rescaled small step's, pss_steps.h, over PssMove's differences.)
   void set_rescaled(bool on) { rescaled_ = on; }
   bool rescaled() const { return rescaled_; }
-  double log_small_step_ratio(double sigma_x, double sigma_y) const;
   // Coordinates read from each stream since the last restart (the proposal's D(y) once evaluated).
   const std::array<size_t, kStreams>& reads() const { return index_; }
   const std::array<size_t, kStreams>& current_reads() const { return current_reads_; }

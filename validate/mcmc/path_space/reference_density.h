@@ -17,6 +17,7 @@
 // flux), it does not enter F or B.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <utility>
 
@@ -26,6 +27,7 @@
 #include "lib/mcmc/path_space/caustic_perturbation.h"
 #include "lib/mcmc/path_space/lens_perturbation.h"
 #include "lib/mcmc/path_space/multi_chain_perturbation.h"
+#include "lib/mcmc/path_space/path_mutations.h"
 #include "lib/geometry/spawn.h"
 #include "lib/path/dirac.h"
 
@@ -122,6 +124,33 @@ inline double reference_density(const MultiChainPerturbation& mc, const PathCont
   return p;
 }
 
+// The reference density of a registered mutation (path_mutations.h): the independent assembly
+// above for the four of Veach, the mutation's own stated density for any other (a mutation
+// registered later is then checked for an acceptance consistent with what it states).
+inline std::function<double(const MltPath&, const MltPath&)> reference_density_of(const PathMutation& m,
+                                                                                 const PathContext& ctx) {
+  if (auto* b = dynamic_cast<const PathProposalMutation<BidirectionalMutation>*>(&m))
+    return [b](const MltPath& x, const MltPath& y) { return reference_density(b->proposal(), x, y); };
+  if (auto* l = dynamic_cast<const PathProposalMutation<LensPerturbation>*>(&m))
+    return [l, &ctx](const MltPath& x, const MltPath& y) { return reference_density(l->proposal(), ctx, x, y); };
+  if (auto* c = dynamic_cast<const PathProposalMutation<CausticPerturbation>*>(&m))
+    return [c](const MltPath& x, const MltPath& y) { return reference_density(c->proposal(), x, y); };
+  if (auto* mc = dynamic_cast<const PathProposalMutation<MultiChainPerturbation>*>(&m))
+    return [mc, &ctx](const MltPath& x, const MltPath& y) { return reference_density(mc->proposal(), ctx, x, y); };
+  return [&m](const MltPath& x, const MltPath& y) { return m.density(x, y); };
+}
+
+// A registered mutation as a Proposal (for the generic checkers), with an optional test of where
+// it can act (start paths of the pairwise checks).
+struct MutationProposal {
+  using State = MltPath;
+  const PathMutation* m = nullptr;
+  std::function<bool(const MltPath&)> can_act;
+  std::optional<MltPath> propose(const MltPath& x, Uniforms& u) const { return m->propose(x, u); }
+  double density(const MltPath& x, const MltPath& y) const { return m->density(x, y); }
+  bool applicable(const MltPath& x) const { return can_act ? can_act(x) : m->weight(x) > 0.0; }
+};
+
 // K: a MetropolisHastings kernel; Ref: double(int component, const State& x, const State& y).
 template <class K, class Ref>
 class WithReferenceDensity {
@@ -145,6 +174,7 @@ class WithReferenceDensity {
     const double c = k_->mixture().selection(m.component, x);
     return c > 0.0 ? c * ref_(m.component, x, m.y) : 0.0;
   }
+  mcmc::MoveTerms move_terms(const State& x, const Move& m) const { return k_->move_terms(x, m); }
   double acceptance(const State& x, const Move& m) const { return k_->acceptance(x, m); }
 
  private:

@@ -17,6 +17,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 
 #include "lib/mcmc/path_space/bidirectional_mutation.h"
@@ -30,6 +31,9 @@ struct BidirWayProjection {
   const BidirectionalMutation* mut = nullptr;
   MltPath x;
   int s = 1;
+  // The stated p_{s'}(y, l, na, s') (empty: the mutation's split_density; a negative control
+  // passes a broken one).
+  std::function<double(const MltPath&, int, int, int)> split_density;
   std::optional<Vec3> sample(Uniforms& u) const;
   double pdf(const Vec3& w) const;
 };

@@ -1,4 +1,4 @@
-#include "lib/mcmc/path_space/proposal_projections.h"
+#include "validate/mcmc/path_space/proposal_projections.h"
 
 #include <cmath>
 
@@ -41,7 +41,8 @@ double BidirWayProjection::pdf(const Vec3& w) const {
   v.bsdf = ctx.world->surface(hit->shape_id).bsdf;
   v.light = ctx.world->surface(hit->shape_id).emitter;
   const double area = solid_angle_to_area(1.0, from.hit.p, v.hit.p, v.hit.ng);
-  return area > 0.0 ? mut->split_density(y, way_of(x).l, 1, s) / area : 0.0;
+  const double p = split_density ? split_density(y, way_of(x).l, 1, s) : mut->split_density(y, way_of(x).l, 1, s);
+  return area > 0.0 ? p / area : 0.0;
 }
 
 std::optional<Vec2> LensOffsetProjection::sample(Uniforms& u) const {

@@ -1,0 +1,70 @@
+#include "lib/mcmc/path_space/path_mutations.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "lib/mcmc/path_space/bidirectional_mutation.h"
+#include "lib/mcmc/path_space/caustic_perturbation.h"
+#include "lib/mcmc/path_space/lens_perturbation.h"
+#include "lib/mcmc/path_space/multi_chain_perturbation.h"
+
+namespace tb::path_space {
+
+namespace {
+
+std::shared_ptr<const PathMutation> make_bidir(const PathContext& ctx, const PathMutationSettings& s, double w) {
+  return std::make_shared<const PathProposalMutation<BidirectionalMutation>>(
+      "bidirectional", w, BidirectionalMutation(ctx, s.max_segments));
+}
+std::shared_ptr<const PathMutation> make_lens(const PathContext& ctx, const PathMutationSettings&, double w) {
+  return std::make_shared<const PathProposalMutation<LensPerturbation>>("lens", w, LensPerturbation(ctx, 0.1, 0.0));
+}
+std::shared_ptr<const PathMutation> make_caustic(const PathContext& ctx, const PathMutationSettings&, double w) {
+  return std::make_shared<const PathProposalMutation<CausticPerturbation>>(
+      "caustic", w, CausticPerturbation(ctx), [](const CausticPerturbation&, const MltPath& x) { return x.segments() >= 2; });
+}
+std::shared_ptr<const PathMutation> make_multi(const PathContext& ctx, const PathMutationSettings&, double w) {
+  return std::make_shared<const PathProposalMutation<MultiChainPerturbation>>(
+      "multi-chain", w, MultiChainPerturbation(ctx),
+      [](const MultiChainPerturbation&, const MltPath& x) { return !multi_chain_levels(x).empty(); });
+}
+
+std::vector<PathMutationInfo>& table() {
+  static std::vector<PathMutationInfo> t = {
+      {"bidirectional", "delete a subpath, regenerate it from both ends (Veach 1997, Sec. 11.4.2)", 0.4, make_bidir},
+      {"lens", "perturb the image position, retrace the specular chain (Veach 1997, Sec. 11.4.3)", 0.3, make_lens},
+      {"caustic", "perturb the direction at the light end of a caustic chain (Veach 1997, Sec. 11.4.3)", 0.3,
+       make_caustic},
+      {"multi-chain", "lens perturbation continued through several specular chains (Veach 1997, Sec. 11.4.3)", 0.2,
+       make_multi},
+  };
+  return t;
+}
+
+}  // namespace
+
+const std::vector<PathMutationInfo>& path_mutations() { return table(); }
+
+const PathMutationInfo* find_path_mutation(const std::string& name) {
+  for (const auto& m : table())
+    if (m.name == name) return &m;
+  return nullptr;
+}
+
+void register_path_mutation(PathMutationInfo info) {
+  if (find_path_mutation(info.name)) throw std::invalid_argument("path mutation registered twice: " + info.name);
+  table().push_back(std::move(info));
+}
+
+void unregister_path_mutation(const std::string& name) {
+  auto& t = table();
+  t.erase(std::remove_if(t.begin(), t.end(), [&](const PathMutationInfo& m) { return m.name == name; }), t.end());
+}
+
+PathMutationList make_path_mutations(const PathContext& ctx, const PathMutationSettings& s) {
+  PathMutationList out;
+  for (const auto& m : table()) out.push_back(m.make(ctx, s, m.weight));
+  return out;
+}
+
+}  // namespace tb::path_space

@@ -1,0 +1,103 @@
+// A new mutation is one class and one registration: registered at run time here, it is picked up
+// by the checks that loop over the registries (validate/mcmc/registered_mutations.h, the functions
+// behind mcmc.pss.cornell.registered_mutations.pairwise and
+// mlt.path_space.registered_mutations.pairwise), and by the renderers' drivers.
+#include <memory>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "lib/mcmc/path_space/lens_perturbation.h"
+#include "lib/mcmc/path_space/mlt.h"
+#include "lib/mcmc/path_space/path_mutations.h"
+#include "lib/mcmc/pss/pss_driver.h"
+#include "lib/mcmc/pss/pss_steps.h"
+#include "validate/mcmc/registered_mutations.h"
+#include "validate/render/render_compare.h"
+
+namespace tb {
+namespace {
+
+// A trivial PSS mutation: an independent proposal (a second large step under another name).
+class TrivialIndependentStep final : public pss::PssMutation {
+ public:
+  explicit TrivialIndependentStep(double log_ratio_error = 0.0) : err_(log_ratio_error) {}
+  std::string name() const override { return err_ == 0.0 ? "test independent step" : "test misstated step"; }
+  double weight() const override { return 0.1; }
+  bool independent() const override { return true; }
+  double scale(double, double) const override { return 0.0; }
+  void begin(pss::PssState& s, double) const override { s.start_iteration(true); }
+  // Symmetric: T(y -> x) / T(x -> y) = 1; the misstated variant claims exp(err).
+  double log_reverse_over_forward(const pss::PssMove&) const override { return err_; }
+  double log_density(const pss::DenseState&, const pss::DenseState& y, const pss::PssMove&) const override {
+    for (double v : y)
+      if (!(v >= 0.0 && v < 1.0)) return -std::numeric_limits<double>::infinity();
+    return 0.0;
+  }
+
+ private:
+  double err_;
+};
+
+CheckContext quick() {
+  CheckContext c;
+  c.seed = 3;
+  return c;
+}
+
+TEST(MutationRegistry, NewPssMutationIsPickedUpByTheChecks) {
+  pss::register_pss_mutation({"test independent step", "a trivial mutation registered by a test",
+                              [](const pss::PssStepSettings&) -> std::shared_ptr<const pss::PssMutation> {
+                                return std::make_shared<const TrivialIndependentStep>();
+                              }});
+  const CheckResult r = pss_registered_mutations_pairwise(quick(), "test.pss.registered");
+  pss::unregister_pss_mutation("test independent step");
+  ASSERT_TRUE(r.details["mutations"].contains("test independent step")) << r.message;
+  EXPECT_TRUE(r.details["mutations"]["test independent step"]["passed"].get<bool>()) << r.message;
+  EXPECT_TRUE(r.passed) << r.message;
+
+  // A mutation whose acceptance ratio is misstated: the same check must fail on it.
+  pss::register_pss_mutation({"test misstated step", "a broken mutation registered by a test",
+                              [](const pss::PssStepSettings&) -> std::shared_ptr<const pss::PssMutation> {
+                                return std::make_shared<const TrivialIndependentStep>(0.7);
+                              }});
+  const CheckResult b = pss_registered_mutations_pairwise(quick(), "test.pss.registered.broken");
+  pss::unregister_pss_mutation("test misstated step");
+  ASSERT_TRUE(b.details["mutations"].contains("test misstated step")) << b.message;
+  EXPECT_FALSE(b.details["mutations"]["test misstated step"]["passed"].get<bool>()) << b.message;
+  EXPECT_FALSE(b.passed);
+}
+
+TEST(MutationRegistry, NewPathMutationIsPickedUpByTheChecksAndTheDriver) {
+  using namespace path_space;
+  // A second lens perturbation with a smaller outer radius, under its own name.
+  register_path_mutation({"test small lens", "the lens perturbation with r2 = 2 pixels", 0.1,
+                          [](const PathContext& ctx, const PathMutationSettings&, double w)
+                              -> std::shared_ptr<const PathMutation> {
+                            return std::make_shared<const PathProposalMutation<LensPerturbation>>(
+                                "test small lens", w, LensPerturbation(ctx, 0.1, 2.0));
+                          }});
+  const CheckResult r = path_registered_mutations_pairwise(quick(), "test.path.registered");
+  // The driver runs it too: its statistics name it and it is proposed.
+  const auto world = load_scene_at_resolution("cornell-box.json", 8, 8);
+  RenderSettings st;
+  st.spp = 16;
+  st.passes = 2;
+  st.max_depth = 3;
+  Film film(8, 8);
+  const MltStats stats = run_mlt(*world, st, film);
+  unregister_path_mutation("test small lens");
+  ASSERT_TRUE(r.details["mutations"].contains("test small lens")) << r.details.dump(1);
+  EXPECT_TRUE(r.details["mutations"]["test small lens"]["passed"].get<bool>()) << r.message;
+  EXPECT_TRUE(r.passed) << r.details.dump(1);
+  bool seen = false;
+  for (const auto& m : stats.mutations)
+    if (m.name == "test small lens") {
+      seen = true;
+      EXPECT_GT(m.proposed, 0);
+    }
+  EXPECT_TRUE(seen);
+}
+
+}  // namespace
+}  // namespace tb
