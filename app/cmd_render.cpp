@@ -14,7 +14,7 @@
 #include "lib/core/parallel.h"
 #include "lib/film/exr_io.h"
 #include "lib/film/png_preview.h"
-#include "lib/integrator/integrator_registry.h"
+#include "lib/registry/integrator_registry.h"
 #include "lib/scene/scene_loader.h"
 
 namespace tb {

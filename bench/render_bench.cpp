@@ -36,8 +36,8 @@
 #include "lib/core/parallel.h"
 #include "lib/core/rng.h"
 #include "lib/core/warp_sphere.h"
-#include "lib/integrator/integrator_registry.h"
 #include "lib/integrator/path_tracer.h"
+#include "lib/registry/integrator_registry.h"
 #include "lib/scene/scene_loader.h"
 
 namespace tb {

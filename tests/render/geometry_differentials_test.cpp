@@ -1,14 +1,14 @@
-// Differential geometry of every shape against finite differences of its parameterisation
-// (VALIDATION.md C): dp/du, dp/dv, dn/du, dn/dv, plus consistency of normals and re-projection.
+// Differential geometry of every shape against finite differences of its parameterisation:
+// dp/du, dp/dv, dn/du, dn/dv, plus consistency of normals and re-projection.
 // (validate/stats/fd_jacobian.h crashed when this was written -- free() of an Eigen vector --
-// so the geometry-specific checker lib/geometry/differential_check.h is used.)
+// so the geometry-specific checker validate/geometry/differential_check.h is used.)
 #include <gtest/gtest.h>
 
 #include "lib/core/hash.h"
 #include "lib/core/rng.h"
-#include "lib/geometry/differential_check.h"
 #include "lib/geometry/mesh_builders.h"
 #include "lib/geometry/reference_shapes.h"
+#include "validate/geometry/differential_check.h"
 
 namespace tb {
 namespace {

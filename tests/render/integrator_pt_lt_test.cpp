@@ -10,11 +10,11 @@
 
 #include "lib/camera/pinhole_camera.h"
 #include "lib/core/parallel.h"
-#include "lib/integrator/integrator_registry.h"
 #include "lib/integrator/light_tracer.h"
 #include "lib/integrator/path_tracer.h"
 #include "lib/material/bsdf_registry.h"
 #include "lib/material/lambert.h"
+#include "lib/registry/integrator_registry.h"
 #include "validate/image_compare.h"
 
 namespace tb {

@@ -12,12 +12,12 @@
 
 #include "lib/core/hash.h"
 #include "lib/core/rng.h"
-#include "lib/geometry/differential_check.h"
 #include "lib/geometry/mesh_builders.h"
 #include "lib/geometry/reference_shapes.h"
 #include "lib/geometry/self_intersection.h"
 #include "validate/chi2/pearson_gof.h"
 #include "validate/chi2/sampler_chi2.h"
+#include "validate/geometry/differential_check.h"
 #include "validate/registry.h"
 
 namespace tb {

@@ -13,7 +13,7 @@
 
 #include "lib/core/rng.h"
 #include "lib/geometry/spawn.h"
-#include "lib/integrator/integrator_registry.h"
+#include "lib/registry/integrator_registry.h"
 #include "lib/scene/scene_loader.h"
 #include "validate/stats/tests.h"
 

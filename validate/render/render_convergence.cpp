@@ -8,7 +8,7 @@
 
 #include "lib/core/hash.h"
 #include "lib/film/film.h"
-#include "lib/integrator/integrator_registry.h"
+#include "lib/registry/integrator_registry.h"
 
 namespace tb {
 

@@ -1,6 +1,7 @@
 // Integrators by name (`tb render --integrator NAME`): each is a function that renders passes
-// of a World into a Film. Registered from their own .cpp files (STYLE.md: variants are
-// separate registered components, not flags).
+// of a World into a Film; variants are separate entries, not flags. The top layer of lib/
+// (docs/overview.md): it lists the integrators of lib/integrator and the MCMC renderers of
+// lib/mcmc, so it sits above both.
 #pragma once
 
 #include <functional>

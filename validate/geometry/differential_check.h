@@ -1,4 +1,4 @@
-// Finite-difference check of a Hit's differential geometry (VALIDATION.md C): dp/du, dp/dv,
+// Finite-difference check of a Hit's differential geometry: dp/du, dp/dv,
 // dn/du, dn/dv against central differences of p(u, v) and n(u, v) with step
 // h = eps^(1/3) max(1, |x|) (truncation O(h^2) balances rounding O(eps / h)), cross-checked
 // at h / 2 to detect discontinuities (skipped and counted).

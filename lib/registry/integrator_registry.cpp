@@ -1,4 +1,4 @@
-#include "lib/integrator/integrator_registry.h"
+#include "lib/registry/integrator_registry.h"
 
 #include <algorithm>
 

@@ -1,4 +1,4 @@
-#include "lib/geometry/differential_check.h"
+#include "validate/geometry/differential_check.h"
 
 #include <algorithm>
 #include <array>
