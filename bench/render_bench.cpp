@@ -14,6 +14,10 @@
 //    ratio PT segments/s : raw rtcIntersect1 rays/s directly.
 //  - BM_Integrator/<name>/<scene>: samples/s of every registered integrator except albedo on
 //    every shipped scene (scenes/*.json) at 512 x 512, 1 spp per iteration, all threads.
+//  - BM_Mcmc/<name>/threads:N: mutations/s of every MCMC integrator of the registry (the names
+//    whose run report counts mutations) on the Cornell box at 128 x 128, 16 mutations per pixel
+//    in 4 passes (or chains) per iteration, 1 and 2 threads; counter mutations/s is the
+//    integrator's own figure (its mutation phase), wall/s includes bootstrap and start-up.
 // Ratio to report: PT segments/s / raw rtcIntersect1 rays/s at 2 threads (target >= 0.5), and
 // the thread scaling of each from 1 to 2 threads. The */cpu_s counters divide by the process's
 // CPU time instead (all threads): on a shared machine they still compare PT with raw Embree.
@@ -278,8 +282,34 @@ void integrator_bench(benchmark::State& state, const IntegratorInfo* integ, cons
   state.counters["samples/cpu_s"] = samples / (process_cpu_seconds() - cpu0);
 }
 
+// mutations/s of one MCMC integrator on the Cornell box, 128 x 128, 16 mutations per pixel.
+void mcmc_bench(benchmark::State& state, const IntegratorInfo* integ) {
+  const ThreadLimit limit(static_cast<size_t>(state.range(0)));
+  const World& w = scene("cornell-box.json", 128);
+  RenderSettings st;
+  st.spp = 16;
+  st.passes = 4;
+  uint64_t seed = 1;
+  double mutations = 0.0, mutation_seconds = 0.0;
+  int64_t total = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (auto _ : state) {
+    RunReport report;
+    st.report = &report;
+    st.seed = seed++;
+    Film film(w.camera().width(), w.camera().height());
+    integ->render(w, st, film);
+    mutations += double(report.mutations_total);
+    if (report.mutations_per_second > 0) mutation_seconds += double(report.mutations_total) / report.mutations_per_second;
+    total += report.mutations_total;
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  state.counters["mutations/s"] = mutation_seconds > 0 ? mutations / mutation_seconds : 0.0;
+  state.counters["wall/s"] = wall > 0 ? double(total) / wall : 0.0;
+}
+
 // Registered at static initialisation (before benchmark_main runs): every integrator of the
-// registry but albedo, on every scene file.
+// registry but albedo, on every scene file; every MCMC integrator on the Cornell box.
 [[maybe_unused]] const bool kRegistered = [] {
   std::vector<std::string> files;
   for (const auto& e : std::filesystem::directory_iterator(kScenes))
@@ -292,6 +322,15 @@ void integrator_bench(benchmark::State& state, const IntegratorInfo* integ, cons
           ->UseRealTime()
           ->Unit(benchmark::kMillisecond)
           ->MinTime(1.0);
+    const bool mcmc = integ.name.find("mlt") != std::string::npos;
+    if (mcmc)
+      benchmark::RegisterBenchmark(("BM_Mcmc/" + integ.name).c_str(), mcmc_bench, &integ)
+          ->Arg(1)
+          ->Arg(2)
+          ->ArgName("threads")
+          ->UseRealTime()
+          ->Unit(benchmark::kMillisecond)
+          ->MinTime(2.0);
   }
   return true;
 }();
