@@ -16,6 +16,11 @@ TransportMode opposite(TransportMode m) {
   return m == TransportMode::kRadiance ? TransportMode::kImportance : TransportMode::kRadiance;
 }
 
+ShadingCorrection correction_for(IntegratorFault fault) {
+  return fault == IntegratorFault::kShadingCorrectionInverted ? ShadingCorrection::kInverted
+                                                              : ShadingCorrection::kAdjoint;
+}
+
 double abs_cos(const Vec3& n, const Vec3& w) {
   return (n.x == 0 && n.y == 0 && n.z == 0) ? 1.0 : std::abs(glm::dot(n, w));
 }
@@ -25,7 +30,7 @@ double abs_cos(const Vec3& n, const Vec3& w) {
 // with pdf_next() on the vertex positions (not the sampled ray directions, which differ by the
 // spawn offsets), so they equal what path_densities() computes for the finished path.
 void random_walk(const PathContext& ctx, Uniforms& rng, Ray ray, Rgb beta, size_t max_vertices, TransportMode mode,
-                 std::vector<PathVertex>* path) {
+                 std::vector<PathVertex>* path, ShadingCorrection correction = ShadingCorrection::kAdjoint) {
   const World& world = *ctx.world;
   auto link = [&](PathVertex& v) {  // densities of the vertex just found, before it is pushed
     const size_t m = path->size();  // index v will take
@@ -61,7 +66,7 @@ void random_walk(const PathContext& ctx, Uniforms& rng, Ray ray, Rgb beta, size_
     if (path->size() >= max_vertices || !v.bsdf) return;
 
     PathVertex& cur = path->back();
-    const SurfaceScatter sc(cur.hit, *cur.bsdf);
+    const SurfaceScatter sc(cur.hit, *cur.bsdf, correction);
     const Vec3 wo = -glm::normalize(ray.d);
     const double uc = rng.next();
     const Vec2 u = rng.next2();
@@ -159,7 +164,8 @@ int generate_camera_subpath(const PathContext& ctx, const Vec2& raster, const Ve
   return static_cast<int>(path->size());
 }
 
-int generate_light_subpath(const PathContext& ctx, Uniforms& rng, int max_vertices, std::vector<PathVertex>* path) {
+int generate_light_subpath(const PathContext& ctx, Uniforms& rng, int max_vertices, std::vector<PathVertex>* path,
+                           IntegratorFault fault) {
   path->clear();
   if (max_vertices < 1) return 0;
   const auto choice = ctx.lights->sample(rng.next());
@@ -182,7 +188,8 @@ int generate_light_subpath(const PathContext& ctx, Uniforms& rng, int max_vertic
   const Rgb beta = e->le * cos0 / (choice->pmf * e->pdf_pos * e->pdf_dir);
   const bool area = (light.flags() & light_flags::kArea) != 0;
   const Ray ray = area ? spawn_ray(e->hit, e->ray.d) : e->ray;
-  random_walk(ctx, rng, ray, beta, static_cast<size_t>(max_vertices), TransportMode::kImportance, path);
+  random_walk(ctx, rng, ray, beta, static_cast<size_t>(max_vertices), TransportMode::kImportance, path,
+              correction_for(fault));
   return static_cast<int>(path->size());
 }
 
@@ -231,7 +238,8 @@ Connection connect_bdpt(const PathContext& ctx, std::span<const PathVertex> ligh
     if (s == 1)
       fs = emitted(ls, xk);
     else
-      fs = SurfaceScatter(ls.hit, *ls.bsdf).f(direction(ls, light[s - 2]), cs->wi, TransportMode::kImportance);
+      fs = SurfaceScatter(ls.hit, *ls.bsdf, correction_for(fault))
+               .f(direction(ls, light[s - 2]), cs->wi, TransportMode::kImportance);
     c.unweighted = ls.beta * fs * abs_cos(ls.shading_normal(), cs->wi) * xk.beta;
     if (is_black(c.unweighted) || !visible(scene, ls, xk)) {
       c.unweighted = Rgb(0.0);
@@ -275,7 +283,8 @@ Connection connect_bdpt(const PathContext& ctx, std::span<const PathVertex> ligh
   const double d2 = glm::dot(d, d);
   if (!(d2 > 0)) return c;
   const Vec3 w = d / std::sqrt(d2);  // from the light side to the camera side
-  const Rgb fl = SurfaceScatter(ls.hit, *ls.bsdf).f(direction(ls, light[s - 2]), w, TransportMode::kImportance);
+  const Rgb fl = SurfaceScatter(ls.hit, *ls.bsdf, correction_for(fault))
+                     .f(direction(ls, light[s - 2]), w, TransportMode::kImportance);
   const Rgb fc = SurfaceScatter(ct.hit, *ct.bsdf).f(direction(ct, camera[t - 2]), -w, TransportMode::kRadiance);
   const double g = abs_cos(ls.shading_normal(), w) * abs_cos(ct.shading_normal(), w) / d2;
   c.unweighted = ls.beta * fl * g * fc * ct.beta;
@@ -320,7 +329,7 @@ int64_t render_bdpt(const World& world, const RenderSettings& st, Film& film) {
               const Vec2 lens_u = rng.next2();
               const Vec2 raster(x + film_u.x, y + film_u.y);
               const int nc = generate_camera_subpath(ctx, raster, lens_u, rng, max_cam, &cam_path);
-              const int nl = generate_light_subpath(ctx, rng, max_light, &light_path);
+              const int nl = generate_light_subpath(ctx, rng, max_light, &light_path, st.fault);
               Rgb L(0.0);
               for (int t = 1; t <= nc; ++t)
                 for (int s = 0; s <= nl; ++s) {

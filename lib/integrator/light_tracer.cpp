@@ -73,7 +73,7 @@ class LightTracer {
       if (!hit) break;
       const SurfaceInfo& surf = world_.surface(hit->shape_id);
       if (!surf.bsdf) break;
-      const SurfaceScatter scatter(*hit, *surf.bsdf);
+      const SurfaceScatter scatter(*hit, *surf.bsdf, correction_);
       const Vec3 wo = -ray.d;
       const Uniforms<VertexDim> u(rng);
 
@@ -132,6 +132,9 @@ class LightTracer {
   const World& world_;
   const RenderSettings& st_;
   LightSampler lights_;
+  const ShadingCorrection correction_ = st_.fault == IntegratorFault::kShadingCorrectionInverted
+                                            ? ShadingCorrection::kInverted
+                                            : ShadingCorrection::kAdjoint;
 };
 
 }  // namespace

@@ -16,6 +16,8 @@ enum class IntegratorFault {
   kMisMissingDensity,   // an MIS weight computed with one density left out of its denominator
   kNeeNoCosine,         // next-event estimation without the cosine at the receiving vertex
   kRouletteNoInverse,   // Russian roulette that drops paths without dividing survivors by q
+  kShadingCorrectionInverted,  // light subpaths (lt, bdpt) with the reciprocal of the adjoint's
+                               // shading-normal factor (lib/path/scattering.h)
 };
 
 // What an MCMC integrator reports of its run (`tb render` prints it and writes it to the JSON

@@ -47,11 +47,14 @@ double pdf_next_dirac(const PathContext& ctx, const PathVertex* prev, const Path
   double p = choice == DiracLobeChoice::kSampled ? s->pdf : 1.0;
   if (mode == TransportMode::kImportance) {
     // The delta of an importance-mode step is in the camera-side direction: convert it to the
-    // light-side delta of f_s (see the header).
+    // light-side delta of f_s (see the header). The ratio is of the BSDF values without the
+    // shading-normal factor of the adjoint (s->f carries it): p = P_imp f_s(c -> l) / f*_s(l -> c)
+    // makes f(X) / p the light subpath's weight (docs/path.md, Shading normals; Veach 1997, Eq. 5.19).
     const auto r = dirac_lobe(cur, wn, wp, TransportMode::kRadiance);
     const double den = channel_sum(s->f);
-    if (!r || !(den > 0.0)) return 0.0;
-    p *= channel_sum(r->f) / den;
+    const double corr = importance_shading_correction(cur.hit, wp, wn);
+    if (!r || !(den > 0.0) || !(corr > 0.0)) return 0.0;
+    p *= channel_sum(r->f) * corr / den;
   }
   return to_area(p, cur, next);
 }

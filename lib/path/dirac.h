@@ -15,8 +15,10 @@
 // direction instead. The adjoint BSDF identity f_imp(l, c) = f_rad(c, l) (Veach 1997, Eq. 5.19,
 // as distributions in the pair of directions) converts it: with the coefficients f_rad(c, l),
 // f_imp(l, c) of BsdfSample::f,
-//   delta_c = (f_rad(c, l) / f_imp(l, c)) delta_l,   so   p_w := P_imp(lobe) f_rad(c, l) / f_imp(l, c).
-// For a mirror the factor is 1 (up to the shading-normal correction); for refraction it carries
+//   delta_c = (f_rad(c, l) / f_imp(l, c)) delta_l,   so   p_w := P_imp(lobe) f_rad(c, l) / f_imp(l, c),
+// f_imp here without the shading-normal factor of the adjoint (scattering.h), which the light
+// subpath's weight carries and f(X) does not (docs/path.md, Shading normals).
+// For a mirror the factor is 1; for refraction it carries
 // the eta^2 and cosine ratio of the non-symmetric BTDF (Veach 1997, Sec. 5.2). With this, f / p of
 // a path equals the true sampling weight whichever side sampled each specular vertex, so sums over
 // the ways of sampling a path (the bidirectional mutation) and Metropolis ratios are consistent.

@@ -113,10 +113,15 @@ Rgb measurement_contribution(const PathContext& ctx, std::span<const PathVertex>
   Rgb f = emitted(x[0], x[1]);
   for (size_t i = 0; i < k && !is_black(f); ++i) {
     const PathVertex &a = x[i], &b = x[i + 1];
-    // Geometry term with shading-normal cosines; no distance to a direction.
+    // The geometry term with geometric cosines (Veach 1997, Eq. 8.3: the densities of the vertices
+    // are in their geometric area, measure.h), except at a scattering vertex b, whose cosine
+    // towards the light side a is the shading one of the projected BSDF f_s |l.n_s| that path
+    // tracing samples with (Veach 1997, Eq. 5.17): f_s |l.n_s| / |l.n_g| times G's |l.n_g|,
+    // without the division (docs/path.md, Shading normals). No distance to a direction.
     double g = 1.0;
     const Vec3 w = direction(a, b);
-    const Vec3 na = a.shading_normal(), nb = b.shading_normal();
+    const bool b_scatters = i + 1 < k;
+    const Vec3 na = a.geometric_normal(), nb = b_scatters ? b.shading_normal() : b.geometric_normal();
     if (!is_zero(na)) g *= std::abs(glm::dot(na, w));
     if (!is_zero(nb)) g *= std::abs(glm::dot(nb, w));
     if (!a.infinite && !b.infinite) {

@@ -12,8 +12,11 @@
 // Measurement contribution (Veach 1997, Eq. 8.7, radiance form):
 //   f(X) = Le(x_0 -> x_1) G(x_0, x_1) prod_{i=1}^{k-1} f_s(x_{i-1} -> x_i -> x_{i+1}) G(x_i, x_{i+1})
 //          * We(x_k -> x_{k-1}),
-// with G(x, y) = V(x, y) |cos_x| |cos_y| / |x - y|^2. Cosines use the shading normal at a
-// surface vertex (lib/path/scattering.h), the forward axis at the lens, none at a point light.
+// with G(x, y) = V(x, y) |cos_x| |cos_y| / |x - y|^2 with geometric normals, and the BSDF of a
+// scattering vertex in its projected form with respect to the geometric normal,
+// f_s(l -> c) |l.n_s| / |l.n_g| (Veach 1997, Sec. 5.3.2; l towards x_{i-1}): the measurement
+// path tracing estimates when shading normals differ from geometric ones (docs/path.md, Shading
+// normals). The forward axis is the normal at the lens; a point light has no cosine.
 //
 // Densities. For technique (s, t), s + t = k + 1, the light subpath x_0 .. x_{s-1} is sampled
 // from the emitter and the camera subpath x_k .. x_s from the lens (Veach 1997, Sec. 10.2). Every

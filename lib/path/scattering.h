@@ -4,8 +4,10 @@
 //    of the geometric normal that `wo` lies on; f is zero unless wi lies on that side of the
 //    geometric normal too (no light leaks through shading normals);
 //  - the shading-normal correction of the adjoint BSDF for importance transport (Veach 1997,
-//    Sec. 5.3, Eq. 5.19): f_imp is multiplied by |wo.ng| |wi.n| / (|wo.n| |wi.ng|), so that light
-//    tracing estimates the same measurement as path tracing when n != ng;
+//    Sec. 5.3.2, Eq. 5.19; pbrt-v3 Sec. 16.1.3): f_imp is multiplied by
+//    |wo.n| |wi.ng| / (|wo.ng| |wi.n|), wo the light side, so that light tracing and the light
+//    subpaths of BDPT estimate the measurement path tracing estimates when n != ng (derivation
+//    in docs/path.md, "Shading normals");
 //  - cosines: a contribution uses |wi.n| (shading normal) for the projected solid angle at a
 //    surface vertex; density conversions to area use the geometric normal (measure.h).
 // Directions: wo is where the path came from, wi where it goes, both unit and pointing away.
@@ -19,6 +21,17 @@
 
 namespace tb {
 
+// The shading-normal factor of the adjoint BSDF: kAdjoint is Veach's (Eq. 5.19), the one every
+// integrator uses; kInverted, its reciprocal, exists only for a negative control
+// (IntegratorFault::kShadingCorrectionInverted).
+enum class ShadingCorrection : uint8_t { kAdjoint, kInverted };
+
+// The factor f_imp(wo -> wi) / f*_s(wo -> wi) = |wo.n| |wi.ng| / (|wo.ng| |wi.n|) at `hit` (n the
+// shading normal, wo the light-side direction, wi the camera-side one; Veach 1997, Eq. 5.19).
+// Exactly 1 where n == ng; 0 where |wo.ng| |wi.n| = 0.
+double importance_shading_correction(const SurfacePoint& hit, const Vec3& wo, const Vec3& wi,
+                                     ShadingCorrection which = ShadingCorrection::kAdjoint);
+
 struct WorldBsdfSample {
   Vec3 wi{0.0};
   Rgb f{0.0};       // corrected BSDF value (delta lobes: coefficient / |cos|, as BsdfSample::f)
@@ -31,7 +44,8 @@ struct WorldBsdfSample {
 class SurfaceScatter {
  public:
   // `hit` (a Hit or a SurfacePoint) must outlive the object.
-  SurfaceScatter(const SurfacePoint& hit, const Bsdf& bsdf) : hit_(&hit), bsdf_(&bsdf), flags_(bsdf.flags()) {}
+  SurfaceScatter(const SurfacePoint& hit, const Bsdf& bsdf, ShadingCorrection correction = ShadingCorrection::kAdjoint)
+      : hit_(&hit), bsdf_(&bsdf), flags_(bsdf.flags()), correction_(correction) {}
 
   Rgb f(const Vec3& wo, const Vec3& wi, TransportMode mode) const;
   double pdf(const Vec3& wo, const Vec3& wi, TransportMode mode) const;
@@ -60,6 +74,7 @@ class SurfaceScatter {
   const SurfacePoint* hit_;
   const Bsdf* bsdf_;
   uint32_t flags_;              // bsdf_->flags(), read once (a virtual call)
+  ShadingCorrection correction_;  // kAdjoint except in a negative control
   // Storage for a frame that is left uninitialised until build_frame constructs it: two
   // default-constructed Frames (18 doubles) would otherwise be written for every vertex.
   union FrameSlot {

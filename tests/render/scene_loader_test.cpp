@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "lib/film/film.h"
+#include "lib/geometry/ray.h"
 #include "lib/integrator/albedo_integrator.h"
 
 namespace tb {
@@ -93,6 +94,31 @@ TEST(SceneLoader, ShippedScenesLoadAndRender) {
     ++n;
   }
   EXPECT_GE(n, 1);
+}
+
+// scenes/smooth-mesh.json: the OBJ sphere's vn and the inline mesh's "normals" are the shading
+// normals of the hits. The vertex normals are the exact sphere normals, so the interpolated
+// shading normal is closer to the radial direction than the flat facet's geometric normal.
+TEST(SceneLoader, SmoothMeshSceneUsesVertexNormals) {
+  const auto w = load_world((std::filesystem::path(TB_SOURCE_DIR) / "scenes" / "smooth-mesh.json").string());
+  struct Sphere {
+    Vec3 centre;
+    const char* name;
+  };
+  for (const Sphere& sp : {Sphere{Vec3(-0.5, 0.5, 0), "obj"}, Sphere{Vec3(0.55, 0.4, 0.25), "inline"}}) {
+    SCOPED_TRACE(sp.name);
+    int differ = 0;
+    for (int i = 0; i < 25; ++i) {
+      // Rays from +z at offsets across the sphere's disk (away from the facet centres).
+      const Vec3 o = sp.centre + Vec3(0.06 * (i % 5 - 2) + 0.013, 0.06 * (i / 5 - 2) + 0.007, 3.0);
+      const auto hit = w->geometry().intersect(Ray{o, Vec3(0, 0, -1)});
+      ASSERT_TRUE(hit.has_value());
+      const Vec3 radial = glm::normalize(hit->p - sp.centre);
+      EXPECT_GE(glm::dot(hit->n, radial), glm::dot(hit->ng, radial) - 1e-12);
+      if (1.0 - glm::dot(hit->n, hit->ng) > 1e-4) ++differ;
+    }
+    EXPECT_GE(differ, 20);
+  }
 }
 
 }  // namespace

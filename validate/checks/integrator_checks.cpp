@@ -231,6 +231,10 @@ const std::vector<SceneCase>& scene_cases() {
       {"cornell-box", "cornell-box.json", {12, 16, 8}, {32, 64, 32}, 8},
       {"glossy", "glossy.json", {12, 16, 8}, {32, 64, 32}, 8},
       {"caustic", "caustic.json", {12, 16, 8}, {32, 64, 32}, 8},
+      // Coarse meshes with per-vertex shading normals (an OBJ with vn, and inline "normals"):
+      // every estimator must apply the same shading-normal convention, light subpaths the
+      // adjoint correction (Veach 1997, Eq. 5.19; docs/path.md, Shading normals).
+      {"smooth-mesh", "smooth-mesh.json", {12, 16, 8}, {32, 64, 32}, 8},
   };
   return c;
 }
@@ -607,6 +611,13 @@ const bool registered = [] {
            .kind = CheckKind::kStatistical,
            .run = [](const CheckContext& c) {
              return run_agreement(c, scene_cases()[0], "pt", IntegratorFault::kNeeNoCosine);
+           }});
+  reg.add({.name = "integrator.agreement.control.lt_shading_correction_inverted",
+           .description = "negative control: lt with the reciprocal of the adjoint BSDF's shading-normal factor "
+                          "must be rejected against the bdpt reference on smooth-mesh.json, alpha 0.01",
+           .kind = CheckKind::kStatistical,
+           .run = [](const CheckContext& c) {
+             return run_agreement(c, scene_cases()[3], "lt", IntegratorFault::kShadingCorrectionInverted);
            }});
   for (int length = 2; length <= 4; ++length) {
     reg.add({.name = fmt::format("integrator.bdpt.techniques.furnace.length{}", length),
