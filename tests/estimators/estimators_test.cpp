@@ -2,7 +2,8 @@
 // MMIS with T = 1 equals SMIS; MMIS whose techniques are all classical (extruded, or in the split
 // classical sum) equals multi-sample balance-heuristic MIS; the split and extruded forms of mixing
 // classical and marginal techniques agree; MIS weights sum to one; pdf-evaluation counts are n·N·T;
-// the per-sample MMIS weights give exactly the scalar Eq. 6 estimate.
+// the per-sample MMIS weights give exactly the scalar Eq. 6 estimate; CMIS with the continuous
+// balance heuristic equals MC from the exact marginal (and MC itself over an extruded technique).
 #include <array>
 #include <cmath>
 #include <vector>
@@ -12,7 +13,9 @@
 #include "analytic/classical_techniques_1d.h"
 #include "analytic/integrands.h"
 #include "analytic/marginal_techniques_1d.h"
+#include "analytic/uniform_centre_normal_1d.h"
 #include "estimators/any_marginal_technique.h"
+#include "estimators/cmis.h"
 #include "estimators/extruded_technique.h"
 #include "estimators/mc.h"
 #include "estimators/mis.h"
@@ -31,6 +34,10 @@ static_assert(Technique<ExactMarginal1D>);
 static_assert(MarginalTechnique<ConditionalNormal1D>);
 static_assert(MarginalTechnique<ExtrudedTechnique<Classical1D>>);
 static_assert(MarginalTechnique<AnyMarginalTechnique<ExtrudedTechnique<Classical1D>, ConditionalNormal1D>>);
+static_assert(ContinuousTechnique<ConditionalNormal1D>);
+static_assert(ContinuousTechnique<UniformCentreNormal1D>);
+static_assert(ContinuousTechnique<ExtrudedTechnique<Classical1D>>);
+static_assert(ContinuousMisWeight<ContinuousBalanceHeuristic, UniformCentreNormal1D>);
 
 constexpr double kTol = 1e-12;
 
@@ -236,6 +243,41 @@ TEST(Mmis, BudgetEstimateReusesOneDrawAndEqualsRealisationsAveraged) {
     EXPECT_EQ(b.value, s / k);
     EXPECT_EQ(b.pdf_evals, int64_t{n} * 16 * 2);
   }
+}
+
+TEST(Cmis, BalanceHeuristicEqualsMcFromTheExactMarginal) {
+  // Draw by draw: ExactMarginal1D samples t then x, as CMIS does, and divides by p(x) (quadrature).
+  const auto& f = integrand_1d("gaussian_mixture");
+  const auto m = centre_technique(0.2);
+  const ExactMarginal1D exact{&m};
+  for (uint64_t rep = 0; rep < 5; ++rep) {
+    Rng r1 = Rng::for_sample(19, 0, rep), r2 = r1;
+    RngUniforms u1(r1), u2(r2);
+    const Estimate c = estimate_cmis(f, m, 4, u1);
+    const Estimate mc = estimate_mc(f, exact, 4, u2);
+    expect_close(c.value, mc.value);
+    EXPECT_EQ(c.pdf_evals, 8);  // p(x | t) and p(x) per sample
+  }
+}
+
+TEST(Cmis, OverAnExtrudedTechniqueIsMc) {
+  const auto& f = integrand_1d("product");
+  const Classical1D c(PiecewiseConstantTechnique1D({0.0, 0.5, 0.8, 1.0}, {1.0, 3.0, 0.5}));
+  const ExtrudedTechnique<Classical1D> e{c};
+  for (uint64_t rep = 0; rep < 50; ++rep) {
+    Rng r1 = Rng::for_sample(29, 0, rep), r2 = r1;
+    RngUniforms u1(r1), u2(r2);
+    expect_close(estimate_cmis(f, e, 16, u1).value, estimate_mc(f, c, 16, u2).value);
+  }
+}
+
+TEST(Cmis, ClosedFormMarginalIsImportanceSamplingFromIt) {
+  // With the balance heuristic every term is f(x) / p(x): exact when f is proportional to p(x).
+  const UniformCentreNormal1D m(0.2, 0.7, 0.1, 0.2);
+  auto f = [&](double x) { return 2.5 * m.marginal_pdf(x); };
+  Rng r(31);
+  RngUniforms u(r);
+  for (int rep = 0; rep < 100; ++rep) EXPECT_NEAR(estimate_cmis(f, m, 8, u).value, 2.5, 1e-12);
 }
 
 TEST(MisHeuristics, WeightsSumToOne) {
