@@ -141,21 +141,24 @@ void for_each_mmis_weight(std::span<const C> classical, std::span<const int> cla
                           Visit&& visit) {
   using X = typename M::Sample;
   const auto* const aux = d.aux.data();
+  const M* const mar = marginal.data();
   const size_t np = d.aux.size();
-  // Σ_(i,j) p_i(x | t_ij) over pairs [b, e), added to den in pair order.
-  const auto conditional_sum = [&](const X& x, size_t b, size_t e, double den) {
-    for (size_t k = b; k < e; ++k) den += static_cast<double>(marginal[aux[k].technique].pdf(x, aux[k].t));
-    return den;
-  };
-  // Σ_c n_c p_c(x), the split classical sum; *own receives the term of technique `self` (if any).
-  const auto classical_sum = [&](const X& x, size_t self, double* own) {
+  // The Eq. 6 denominator at x: Σ_c n_c p_c(x) (the split classical sum), then Σ_(i,j) p_i(x | t_ij)
+  // in pair order. *own receives the term of classical technique own_c or of pair own_k (one of
+  // them out of range), which is one of the summands, so it is not evaluated twice.
+  const auto denominator = [&](const X& x, size_t own_c, size_t own_k, double* own) {
     double den = 0.0;
     for (size_t c = 0; c < classical.size(); ++c)
       if (classical_counts[c] > 0) {
         const double term = classical_counts[c] * static_cast<double>(classical[c].pdf(x));
-        if (c == self) *own = term;
+        if (c == own_c) *own = term;
         den += term;
       }
+    for (size_t k = 0; k < np; ++k) {
+      const double term = static_cast<double>(mar[aux[k].technique].pdf(x, aux[k].t));
+      if (k == own_k) *own = term;
+      den += term;
+    }
     return den;
   };
   size_t s = 0;
@@ -167,7 +170,7 @@ void for_each_mmis_weight(std::span<const C> classical, std::span<const int> cla
       w.sample = s;
       w.technique = c;
       w.classical = true;
-      w.denominator = conditional_sum(*x, 0, np, classical_sum(*x, c, &w.own_pdf));  // Eq. 6 denominator
+      w.denominator = denominator(*x, c, np, &w.own_pdf);  // West et al. 2022, Eq. 6 denominator
       w.weight = safe_ratio(w.own_pdf, w.denominator);
       visit(*x, w);
     }
@@ -177,11 +180,7 @@ void for_each_mmis_weight(std::span<const C> classical, std::span<const int> cla
     MmisWeight w;
     w.sample = s;
     w.technique = aux[k].technique;
-    // The pair's own conditional term is one of the summands (taken out of the loop, not re-evaluated).
-    double den = conditional_sum(*x, 0, k, classical_sum(*x, classical.size(), &w.own_pdf));
-    w.own_pdf = static_cast<double>(marginal[aux[k].technique].pdf(*x, aux[k].t));
-    den += w.own_pdf;
-    w.denominator = conditional_sum(*x, k + 1, np, den);  // Eq. 6 denominator
+    w.denominator = denominator(*x, classical.size(), k, &w.own_pdf);  // West et al. 2022, Eq. 6 denominator
     w.weight = safe_ratio(w.own_pdf, w.denominator);
     visit(*x, w);
   }
