@@ -133,7 +133,7 @@ int64_t mmis_pdf_evals_per_sample(std::span<const int> classical_counts, const M
 // Calls visit(x, MmisWeight) for every drawn sample whose x did not fail, in the order of d.xs.
 // The Eq. 6 denominator sums the classical terms in technique order, then the conditional terms
 // in pair order, whatever the sample's own technique (the same order, so the same round-off, for
-// every sample). Nothing is allocated and nothing is called indirectly besides the techniques.
+// every sample). Nothing is allocated; the only calls are to the techniques' pdfs and to visit.
 template <Technique C, MarginalTechnique M, class Visit>
   requires std::same_as<typename C::Sample, typename M::Sample>
 void for_each_mmis_weight(std::span<const C> classical, std::span<const int> classical_counts,
