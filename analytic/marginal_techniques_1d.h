@@ -47,6 +47,8 @@ class ConditionalNormal1D {
   double pdf(double x, const Aux& a) const;
   // p(t), Lebesgue measure in t.
   double pdf_t(double t) const { return p_.t_dist.pdf(t); }
+  // p(t) of a sampled auxiliary (with marginal_pdf, makes this a tb::ContinuousTechnique).
+  double aux_pdf(const Aux& a) const { return pdf_t(a.t); }
   // p(x, t) = p(x | t) p(t).
   double joint_pdf(double x, double t) const { return pdf(x, aux_for(t)) * pdf_t(t); }
   // p(x) = ∫ p(x | t) p(t) dt by adaptive quadrature (relative tolerance 1e-12).

@@ -3,6 +3,9 @@
 //   BM_MmisBudget/n      one estimate: N / (nT) realisations of Eq. 6, sampling included
 //   BM_MmisEvaluate/n    Eq. 6 evaluated over pairs drawn beforehand (the estimator without sampling)
 //   BM_BarePdfEvals/n    the same n·N·T evaluations of p(x | t) over pre-sampled (x, t), nothing else
+//   BM_BareDraws         drawing the N pairs (t, x) into a preallocated array, nothing else (independent of n)
+//   BM_BareIntegrand     the N evaluations of f at pre-sampled x, nothing else (independent of n)
+// The estimate must do all three bare parts; what it costs beyond their sum is the estimator's overhead.
 // Cost linear in n shows as a log-log slope of 1 of time against n (docs/estimators.md).
 // The second argument is the cost of p(x | t): 0 = one exp() with the normaliser cached per pair
 // (cheap: drawing the N pairs then dominates and is constant in n), 200 = a conditional pdf as
@@ -87,6 +90,43 @@ void BM_BarePdfEvals(benchmark::State& state) {
   state.counters["estimates/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_BarePdfEvals)->ArgsProduct({{1, 2, 4, 8, 16}, {0, 20, 200}});
+
+// The N pair draws every MMIS_n estimate makes whatever n (sampling t, then x | t; the same order of
+// uniforms as draw_mmis), into storage allocated once.
+void BM_BareDraws(benchmark::State& state) {
+  const Fig1Bottom b = make_fig1_bottom(static_cast<int>(state.range(0)));
+  const size_t t = b.techniques.size();
+  Rng rng(42);
+  RngUniforms u(rng);
+  std::vector<ConditionalNormal1D::Aux> aux(kBudget);
+  std::vector<double> xs(kBudget);
+  for (auto _ : state) {
+    for (size_t j = 0; j < static_cast<size_t>(kBudget); ++j) {
+      const auto& m = b.techniques[j % t];
+      aux[j] = *m.sample_aux(u);
+      xs[j] = *m.sample(aux[j], u);
+    }
+    benchmark::DoNotOptimize(xs.data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["estimates/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_BareDraws)->Arg(0)->Arg(20)->Arg(200);
+
+// The N evaluations of f (fig1_three_peaks: three exp, called through Integrand1D) every estimate makes.
+void BM_BareIntegrand(benchmark::State& state) {
+  const Fig1Bottom b = make_fig1_bottom();
+  Rng rng(42);
+  std::vector<double> xs(kBudget);
+  for (double& x : xs) x = rng.uniform();
+  for (auto _ : state) {
+    double s = 0.0;
+    for (double x : xs) s += (*b.f)(x);
+    benchmark::DoNotOptimize(s);
+  }
+  state.counters["estimates/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_BareIntegrand);
 
 }  // namespace
 }  // namespace tb

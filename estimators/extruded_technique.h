@@ -21,6 +21,10 @@ struct ExtrudedTechnique {
   std::optional<Sample> sample(const Aux&, Uniforms& u) const { return technique.sample(u); }
   // Same measure as C::pdf.
   double pdf(const Sample& x, const Aux&) const { return technique.pdf(x); }
+  // The technique space is one point of unit mass, so p(t) = 1 and the marginal is p(x) itself: an
+  // extruded technique is a tb::ContinuousTechnique, and CMIS over it is plain MC (cmis.h).
+  double aux_pdf(const Aux&) const { return 1.0; }
+  double marginal_pdf(const Sample& x) const { return technique.pdf(x); }
 };
 
 }  // namespace tb

@@ -9,11 +9,18 @@
 // out, which is how a random subset of techniques is used (technique_subset.h).
 // Cost: S·(C + P) pdf evaluations for S samples, C classical techniques in use and P sampled
 // auxiliaries: with n pairs from each of T marginal techniques, (nT)² per realisation.
+//
+// Three layers, each used by the next: draw_mmis draws the pairs; for_each_mmis_weight computes
+// each drawn sample's MMIS weight (mmis_weights collects them, e.g. for a renderer that splats RGB
+// contributions); evaluate_mmis sums f(x) / D(x) over the same weights, so the scalar estimate of
+// the analytic checks and the per-sample weights of a renderer come from one function.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <span>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "estimators/concepts.h"
@@ -28,9 +35,11 @@ struct MarginalGroup {
   std::span<const int> counts;
 };
 
-// The technique-sample pairs of one MMIS realisation: classical samples first, then the
-// marginal (t, x) pairs. Drawing them and evaluating Eq. 6 over them are separate steps so that
-// the evaluation (n·N·T conditional pdf evaluations) can be timed on its own.
+// The technique-sample pairs of one MMIS realisation: classical samples first (technique by
+// technique, classical_counts[c] each), then the marginal (t, x) pairs; xs[classical_samples + k]
+// is the sample drawn from aux[k]. Drawing them and evaluating Eq. 6 over them are separate steps
+// so that the evaluation (n·N·T conditional pdf evaluations) can be timed on its own. A draw can
+// be refilled (draw_mmis_into) without allocating once its vectors have grown.
 template <class X, class Aux>
 struct MmisDraw {
   struct Pair {
@@ -40,7 +49,42 @@ struct MmisDraw {
   std::vector<Pair> aux;
   std::vector<std::optional<X>> xs;
   int64_t samples = 0, failed = 0;
+  size_t classical_samples() const { return xs.size() - aux.size(); }
+  void clear() {
+    aux.clear();
+    xs.clear();
+    samples = failed = 0;
+  }
 };
+
+template <Technique C, MarginalTechnique M>
+  requires std::same_as<typename C::Sample, typename M::Sample>
+void draw_mmis_into(MmisDraw<typename M::Sample, typename M::Aux>& d, std::span<const C> classical,
+                    std::span<const int> classical_counts, std::span<const M> marginal,
+                    std::span<const int> marginal_counts, Uniforms& u) {
+  if (classical.size() != classical_counts.size() || marginal.size() != marginal_counts.size())
+    throw std::invalid_argument("estimate_mmis: one count per technique");
+  d.clear();
+  // The order of uniforms is part of the estimator's definition (fixed so runs are reproducible).
+  for (size_t c = 0; c < classical.size(); ++c)
+    for (int j = 0; j < classical_counts[c]; ++j) {
+      ++d.samples;
+      d.xs.push_back(classical[c].sample(u));
+      if (!d.xs.back()) ++d.failed;
+    }
+  for (size_t m = 0; m < marginal.size(); ++m)
+    for (int j = 0; j < marginal_counts[m]; ++j) {
+      ++d.samples;
+      auto t = marginal[m].sample_aux(u);
+      if (!t) {  // a failed t is a conditional technique of zero probability: it drops out everywhere
+        ++d.failed;
+        continue;
+      }
+      d.xs.push_back(marginal[m].sample(*t, u));
+      if (!d.xs.back()) ++d.failed;
+      d.aux.push_back({m, std::move(*t)});
+    }
+}
 
 template <Technique C, MarginalTechnique M>
   requires std::same_as<typename C::Sample, typename M::Sample>
@@ -48,35 +92,115 @@ MmisDraw<typename M::Sample, typename M::Aux> draw_mmis(std::span<const C> class
                                                        std::span<const int> classical_counts,
                                                        std::span<const M> marginal,
                                                        std::span<const int> marginal_counts, Uniforms& u) {
-  if (classical.size() != classical_counts.size() || marginal.size() != marginal_counts.size())
-    throw std::invalid_argument("estimate_mmis: one count per technique");
   MmisDraw<typename M::Sample, typename M::Aux> d;
-  // The order of uniforms is part of the estimator's definition (fixed so runs are reproducible).
-  for (size_t c = 0; c < classical.size(); ++c)
-    for (int j = 0; j < classical_counts[c]; ++j) {
-      ++d.samples;
-      auto x = classical[c].sample(u);
-      if (!x) ++d.failed;
-      d.xs.push_back(std::move(x));
-    }
-  for (size_t m = 0; m < marginal.size(); ++m)
-    for (int j = 0; j < marginal_counts[m]; ++j) {
-      ++d.samples;
-      auto t = marginal[m].sample_aux(u);
-      if (!t) {
-        ++d.failed;
-        continue;
-      }
-      auto x = marginal[m].sample(*t, u);
-      if (!x) ++d.failed;
-      d.aux.push_back({m, *t});
-      d.xs.push_back(std::move(x));
-    }
+  draw_mmis_into(d, classical, classical_counts, marginal, marginal_counts, u);
   return d;
 }
 
+// The MMIS weight of one drawn sample x (West et al. 2022, Eq. 6):
+//   denominator D(x) = Σ_c n_c p_c(x) + Σ_(i,j) p_i(x | t_ij)   (the Eq. 6 denominator)
+//   own_pdf          = n_c p_c(x) for a sample of classical technique c (Sec. 3.1, split form),
+//                      p_i(x | t_ij) for the sample of the pair (i, j)
+//   weight           = own_pdf / D(x), the balance weight of the sample's own technique
+// so that the sample's term of Eq. 6 is contribution(f(x)) = f(x) / D(x) = weight · f(x) / own_pdf.
+// A renderer multiplies its (RGB) path throughput f(x) / own_pdf by weight, or divides f by D.
+struct MmisWeight {
+  size_t sample = 0;       // index into MmisDraw::xs
+  size_t technique = 0;    // index into the classical (classical == true) or the marginal techniques
+  bool classical = false;
+  double own_pdf = 0.0;
+  double denominator = 0.0;
+  double weight = 0.0;     // 0 when D(x) = 0
+  // f / D(x) with 0 / 0 = 0.
+  double contribution(double f) const { return safe_ratio(f, denominator); }
+};
+
+template <class X>
+struct MmisWeightedSample {
+  X x;
+  MmisWeight w;
+};
+
+// pdf evaluations per drawn sample (Sec. 3.2 cost model): every classical technique in use and every
+// sampled conditional technique.
+template <class X, class Aux>
+int64_t mmis_pdf_evals_per_sample(std::span<const int> classical_counts, const MmisDraw<X, Aux>& d) {
+  int64_t c = 0;
+  for (int n : classical_counts) c += n > 0;
+  return c + static_cast<int64_t>(d.aux.size());
+}
+
+// Calls visit(x, MmisWeight) for every drawn sample whose x did not fail, in the order of d.xs.
+// The Eq. 6 denominator sums the classical terms in technique order, then the conditional terms
+// in pair order, whatever the sample's own technique (the same order, so the same round-off, for
+// every sample). Nothing is allocated; the only calls are to the techniques' pdfs and to visit.
+template <Technique C, MarginalTechnique M, class Visit>
+  requires std::same_as<typename C::Sample, typename M::Sample>
+void for_each_mmis_weight(std::span<const C> classical, std::span<const int> classical_counts,
+                          std::span<const M> marginal, const MmisDraw<typename M::Sample, typename M::Aux>& d,
+                          Visit&& visit) {
+  using X = typename M::Sample;
+  const auto* const aux = d.aux.data();
+  const M* const mar = marginal.data();
+  const size_t np = d.aux.size();
+  // The Eq. 6 denominator at x: Σ_c n_c p_c(x) (the split classical sum), then Σ_(i,j) p_i(x | t_ij)
+  // in pair order. *own receives the term of classical technique own_c or of pair own_k (one of
+  // them out of range), which is one of the summands, so it is not evaluated twice.
+  const auto denominator = [&](const X& x, size_t own_c, size_t own_k, double* own) {
+    double den = 0.0;
+    for (size_t c = 0; c < classical.size(); ++c)
+      if (classical_counts[c] > 0) {
+        const double term = classical_counts[c] * static_cast<double>(classical[c].pdf(x));
+        if (c == own_c) *own = term;
+        den += term;
+      }
+    for (size_t k = 0; k < np; ++k) {
+      const double term = static_cast<double>(mar[aux[k].technique].pdf(x, aux[k].t));
+      if (k == own_k) *own = term;
+      den += term;
+    }
+    return den;
+  };
+  size_t s = 0;
+  for (size_t c = 0; c < classical.size(); ++c)
+    for (int j = 0; j < classical_counts[c]; ++j, ++s) {
+      const auto& x = d.xs[s];
+      if (!x) continue;
+      MmisWeight w;
+      w.sample = s;
+      w.technique = c;
+      w.classical = true;
+      w.denominator = denominator(*x, c, np, &w.own_pdf);  // West et al. 2022, Eq. 6 denominator
+      w.weight = safe_ratio(w.own_pdf, w.denominator);
+      visit(*x, w);
+    }
+  for (size_t k = 0; k < np; ++k, ++s) {
+    const auto& x = d.xs[s];
+    if (!x) continue;
+    MmisWeight w;
+    w.sample = s;
+    w.technique = aux[k].technique;
+    w.denominator = denominator(*x, classical.size(), k, &w.own_pdf);  // West et al. 2022, Eq. 6 denominator
+    w.weight = safe_ratio(w.own_pdf, w.denominator);
+    visit(*x, w);
+  }
+}
+
+// Every drawn sample (failed ones left out) with its MMIS weight.
+template <Technique C, MarginalTechnique M>
+  requires std::same_as<typename C::Sample, typename M::Sample>
+std::vector<MmisWeightedSample<typename M::Sample>> mmis_weights(
+    std::span<const C> classical, std::span<const int> classical_counts, std::span<const M> marginal,
+    const MmisDraw<typename M::Sample, typename M::Aux>& d) {
+  std::vector<MmisWeightedSample<typename M::Sample>> out;
+  out.reserve(d.xs.size());
+  for_each_mmis_weight(classical, classical_counts, marginal, d,
+                       [&](const typename M::Sample& x, const MmisWeight& w) { out.push_back({x, w}); });
+  return out;
+}
+
 // Eq. 6 (West et al. 2022) over drawn pairs: sum over samples of f(x) / (sum_c n_c p_c(x) +
-// sum_(i,j) p_i(x | t_ij)).
+// sum_(i,j) p_i(x | t_ij)), each term from for_each_mmis_weight.
 template <Technique C, MarginalTechnique M, Integrand<typename M::Sample> F>
   requires std::same_as<typename C::Sample, typename M::Sample>
 Estimate evaluate_mmis(const F& f, std::span<const C> classical, std::span<const int> classical_counts,
@@ -84,18 +208,12 @@ Estimate evaluate_mmis(const F& f, std::span<const C> classical, std::span<const
   Estimate e;
   e.samples = d.samples;
   e.failed = d.failed;
-  for (const auto& x : d.xs) {
-    if (!x) continue;
-    double den = 0.0;
-    for (size_t c = 0; c < classical.size(); ++c)
-      if (classical_counts[c] > 0) {
-        den += classical_counts[c] * static_cast<double>(classical[c].pdf(*x));
-        ++e.pdf_evals;
-      }
-    for (const auto& a : d.aux) den += marginal[a.technique].pdf(*x, a.t);  // West et al. 2022, Eq. 6 denominator
-    e.pdf_evals += static_cast<int64_t>(d.aux.size());
-    e.add(safe_ratio(static_cast<double>(f(*x)), den));
-  }
+  int64_t visited = 0;
+  for_each_mmis_weight(classical, classical_counts, marginal, d, [&](const typename M::Sample& x, const MmisWeight& w) {
+    ++visited;
+    e.add(w.contribution(static_cast<double>(f(x))));
+  });
+  e.pdf_evals = visited * mmis_pdf_evals_per_sample(classical_counts, d);
   return e;
 }
 

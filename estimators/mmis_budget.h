@@ -18,8 +18,16 @@ Estimate estimate_mmis_budget(const F& f, std::span<const M> techniques, int n, 
     throw std::invalid_argument("estimate_mmis_budget: the budget N must be a multiple of n·T");
   const int realisations = budget / (n * t);
   const std::vector<int> counts(techniques.size(), n);
+  using NC = NoClassical<typename M::Sample>;
+  // One draw refilled by every realisation: after the first, no realisation allocates.
+  MmisDraw<typename M::Sample, typename M::Aux> d;
+  d.aux.reserve(static_cast<size_t>(n) * techniques.size());
+  d.xs.reserve(static_cast<size_t>(n) * techniques.size());
   Estimate total;
-  for (int k = 0; k < realisations; ++k) total += estimate_mmis(f, techniques, std::span<const int>(counts), u);
+  for (int k = 0; k < realisations; ++k) {
+    draw_mmis_into(d, std::span<const NC>{}, std::span<const int>{}, techniques, std::span<const int>(counts), u);
+    total += evaluate_mmis(f, std::span<const NC>{}, std::span<const int>{}, techniques, d);  // West et al. 2022, Eq. 6
+  }
   total.value /= realisations;
   return total;
 }

@@ -15,6 +15,7 @@
 #include "analytic/marginal_techniques_1d.h"
 #include "analytic/mis_variance.h"
 #include "analytic/quadrature.h"
+#include "analytic/uniform_centre_normal_1d.h"
 #include "lib/core/rng.h"
 #include "validate/stats/tests.h"
 
@@ -140,6 +141,39 @@ TEST(MarginalTechniques, MarginalAndJointIntegrateToOneAndSamplesFollowMarginal)
       return cdf[i] + (s - i) * (cdf[i + 1] - cdf[i]);
     });
     EXPECT_GT(t.p_value, alpha) << m.name() << " D = " << t.statistic << " (seed 1, key 0xa12)";
+  }
+}
+
+TEST(UniformCentreNormal, ClosedFormMarginalMatchesQuadratureAndSamplesFollowIt) {
+  const std::vector<UniformCentreNormal1D> ms{UniformCentreNormal1D(0.02, 0.98, 0.1, 0.2),
+                                              UniformCentreNormal1D(-0.1, 1.1, 0.15, 0.0),
+                                              UniformCentreNormal1D(0.3, 0.35, 0.01, 0.05)};
+  const double alpha = stats::sidak_alpha(1e-5, static_cast<int64_t>(ms.size()));
+  for (size_t k = 0; k < ms.size(); ++k) {
+    const auto& m = ms[k];
+    // p(x) = ∫ p(t) p(x | t) dt by quadrature, at x inside, near and far outside [0, 1].
+    for (double x : {-0.5, -0.05, 0.0, 0.01, 0.2, 0.33, 0.5, 0.9, 1.0, 1.07, 1.6}) {
+      const double q = integrate_1d([&](double t) { return m.aux_pdf({t}) * m.pdf(x, {t}); }, m.t_lo(), m.t_hi()).value;
+      EXPECT_NEAR(m.marginal_pdf(x), q, 1e-10 * q + 1e-300) << k << " x = " << x;
+    }
+    // p(x) integrates to one over the real line (the normal part decays within 12 sigma).
+    const double lo = std::min(0.0, m.t_lo() - 12 * m.sigma()), hi = std::max(1.0, m.t_hi() + 12 * m.sigma());
+    EXPECT_NEAR(integrate_1d([&](double x) { return m.marginal_pdf(x); }, lo, hi, {0.0, 1.0}).value, 1.0, 1e-10) << k;
+    Rng r = Rng::for_sample(1, 0xa13, k);
+    RngUniforms u(r);
+    std::vector<double> xs;
+    for (int i = 0; i < 3000; ++i) {
+      const auto a = m.sample_aux(u);
+      ASSERT_TRUE(a);
+      EXPECT_GT(m.aux_pdf(*a), 0.0);
+      const auto x = m.sample(*a, u);
+      ASSERT_TRUE(x);
+      xs.push_back(*x);
+    }
+    const auto t = stats::ks_test(xs, [&](double x) {
+      return integrate_1d([&](double v) { return m.marginal_pdf(v); }, std::min(lo, x), x, {0.0, 1.0}, 1e-10).value;
+    });
+    EXPECT_GT(t.p_value, alpha) << k << " D = " << t.statistic << " (seed 1, key 0xa13)";
   }
 }
 

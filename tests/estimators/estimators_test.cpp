@@ -1,7 +1,9 @@
 // Deterministic identities of the generic estimators (tolerance 1e-12 relative):
 // MMIS with T = 1 equals SMIS; MMIS whose techniques are all classical (extruded, or in the split
 // classical sum) equals multi-sample balance-heuristic MIS; the split and extruded forms of mixing
-// classical and marginal techniques agree; MIS weights sum to one; pdf-evaluation counts are n·N·T.
+// classical and marginal techniques agree; MIS weights sum to one; pdf-evaluation counts are n·N·T;
+// the per-sample MMIS weights give exactly the scalar Eq. 6 estimate; CMIS with the continuous
+// balance heuristic equals MC from the exact marginal (and MC itself over an extruded technique).
 #include <array>
 #include <cmath>
 #include <vector>
@@ -11,12 +13,15 @@
 #include "analytic/classical_techniques_1d.h"
 #include "analytic/integrands.h"
 #include "analytic/marginal_techniques_1d.h"
+#include "analytic/uniform_centre_normal_1d.h"
 #include "estimators/any_marginal_technique.h"
+#include "estimators/cmis.h"
 #include "estimators/extruded_technique.h"
 #include "estimators/mc.h"
 #include "estimators/mis.h"
 #include "estimators/mis_heuristics.h"
 #include "estimators/mmis.h"
+#include "estimators/mmis_budget.h"
 #include "estimators/smis.h"
 #include "estimators/technique_subset.h"
 #include "lib/core/rng.h"
@@ -29,6 +34,10 @@ static_assert(Technique<ExactMarginal1D>);
 static_assert(MarginalTechnique<ConditionalNormal1D>);
 static_assert(MarginalTechnique<ExtrudedTechnique<Classical1D>>);
 static_assert(MarginalTechnique<AnyMarginalTechnique<ExtrudedTechnique<Classical1D>, ConditionalNormal1D>>);
+static_assert(ContinuousTechnique<ConditionalNormal1D>);
+static_assert(ContinuousTechnique<UniformCentreNormal1D>);
+static_assert(ContinuousTechnique<ExtrudedTechnique<Classical1D>>);
+static_assert(ContinuousMisWeight<ContinuousBalanceHeuristic, UniformCentreNormal1D>);
 
 constexpr double kTol = 1e-12;
 
@@ -133,6 +142,142 @@ TEST(Mmis, CostIsnNT) {
       evals += estimate_mmis(f, std::span<const ConditionalNormal1D>(mar), std::span<const int>(counts), u).pdf_evals;
     EXPECT_EQ(evals, int64_t{n} * big_n * t);
   }
+}
+
+// A marginal technique whose t and x draws fail (probability 0.2 each), to exercise the pairing of
+// samples with their auxiliaries when some are missing. Its densities are sub-probability ones.
+struct FlakyTechnique {
+  using Aux = ConditionalNormal1D::Aux;
+  using Sample = double;
+  const ConditionalNormal1D* m = nullptr;
+  std::optional<Aux> sample_aux(Uniforms& u) const {
+    if (u.next() < 0.2) return std::nullopt;
+    return m->sample_aux(u);
+  }
+  std::optional<double> sample(const Aux& a, Uniforms& u) const {
+    if (u.next() < 0.2) return std::nullopt;
+    return m->sample(a, u);
+  }
+  double pdf(double x, const Aux& a) const { return 0.8 * m->pdf(x, a); }
+};
+
+// Eq. 6 written out directly (West et al. 2022), the reference for the per-sample weights.
+template <class C, class M>
+double eq6_reference(const Integrand1D& f, const std::vector<C>& cls, const std::vector<int>& nc,
+                     const std::vector<M>& mar, const MmisDraw<double, typename M::Aux>& d) {
+  double sum = 0.0;
+  for (const auto& x : d.xs) {
+    if (!x) continue;
+    double den = 0.0;
+    for (size_t c = 0; c < cls.size(); ++c)
+      if (nc[c] > 0) den += nc[c] * cls[c].pdf(*x);
+    for (const auto& a : d.aux) den += mar[a.technique].pdf(*x, a.t);
+    sum += safe_ratio(f(*x), den);
+  }
+  return sum;
+}
+
+TEST(Mmis, PerSampleWeightsGiveTheScalarEstimate) {
+  const auto& f = integrand_1d("fig1_two_features");
+  const auto cn = centre_technique(), wd = width_technique();
+  const std::vector<Classical1D> cls{Classical1D(TruncatedNormalTechnique1D(0.22, 0.1)), Classical1D(UniformTechnique1D{})};
+  const std::vector<FlakyTechnique> mar{{&cn}, {&wd}};
+  int64_t failed = 0;
+  for (int n : {1, 3, 8}) {
+    const std::vector<int> nc{n, n == 3 ? 0 : 1}, nm{n, 2 * n};
+    for (uint64_t rep = 0; rep < 30; ++rep) {
+      Rng r = Rng::for_sample(17, n, rep);
+      RngUniforms u(r);
+      const auto cs = std::span<const Classical1D>(cls);
+      const auto ms = std::span<const FlakyTechnique>(mar);
+      const auto d = draw_mmis(cs, std::span<const int>(nc), ms, std::span<const int>(nm), u);
+      failed += d.failed;
+      const Estimate e = evaluate_mmis(f, cs, std::span<const int>(nc), ms, d);
+      const auto ws = mmis_weights(cs, std::span<const int>(nc), ms, d);
+      // The scalar estimate is the sum of the per-sample contributions, bit for bit.
+      double sum = 0.0, via_weight = 0.0;
+      for (const auto& s : ws) {
+        sum += s.w.contribution(f(s.x));
+        via_weight += s.w.own_pdf > 0.0 ? s.w.weight * f(s.x) / s.w.own_pdf : 0.0;
+      }
+      EXPECT_EQ(sum, e.value);
+      expect_close(via_weight, e.value);
+      expect_close(e.value, eq6_reference(f, cls, nc, mar, d));
+      // Every sample that did not fail appears once, with its own technique's density.
+      size_t drawn = 0;
+      for (const auto& x : d.xs) drawn += x.has_value();
+      ASSERT_EQ(ws.size(), drawn);
+      for (const auto& s : ws) {
+        ASSERT_TRUE(d.xs[s.w.sample]);
+        EXPECT_EQ(*d.xs[s.w.sample], s.x);
+        if (s.w.classical) {
+          ASSERT_LT(s.w.sample, d.classical_samples());
+          EXPECT_EQ(s.w.own_pdf, nc[s.w.technique] * cls[s.w.technique].pdf(s.x));
+        } else {
+          const auto& a = d.aux[s.w.sample - d.classical_samples()];
+          EXPECT_EQ(a.technique, s.w.technique);
+          EXPECT_EQ(s.w.own_pdf, mar[a.technique].pdf(s.x, a.t));
+        }
+        EXPECT_GE(s.w.weight, 0.0);
+        EXPECT_LE(s.w.weight, 1.0 + kTol);
+        expect_close(s.w.weight * s.w.denominator, s.w.own_pdf);
+      }
+      EXPECT_EQ(e.pdf_evals, static_cast<int64_t>(drawn) * mmis_pdf_evals_per_sample(std::span<const int>(nc), d));
+    }
+  }
+  EXPECT_GT(failed, 0);  // the failing draws were exercised
+}
+
+TEST(Mmis, BudgetEstimateReusesOneDrawAndEqualsRealisationsAveraged) {
+  const auto& f = integrand_1d("smooth");
+  const std::vector<ConditionalNormal1D> mar{centre_technique(0.1), width_technique()};
+  for (int n : {1, 2, 4}) {
+    Rng r1(23), r2(23);
+    RngUniforms u1(r1), u2(r2);
+    const Estimate b = estimate_mmis_budget(f, std::span<const ConditionalNormal1D>(mar), n, 16, u1);
+    const std::vector<int> counts(2, n);
+    double s = 0.0;
+    const int k = 16 / (2 * n);
+    for (int i = 0; i < k; ++i)
+      s += estimate_mmis(f, std::span<const ConditionalNormal1D>(mar), std::span<const int>(counts), u2).value;
+    EXPECT_EQ(b.value, s / k);
+    EXPECT_EQ(b.pdf_evals, int64_t{n} * 16 * 2);
+  }
+}
+
+TEST(Cmis, BalanceHeuristicEqualsMcFromTheExactMarginal) {
+  // Draw by draw: ExactMarginal1D samples t then x, as CMIS does, and divides by p(x) (quadrature).
+  const auto& f = integrand_1d("gaussian_mixture");
+  const auto m = centre_technique(0.2);
+  const ExactMarginal1D exact{&m};
+  for (uint64_t rep = 0; rep < 5; ++rep) {
+    Rng r1 = Rng::for_sample(19, 0, rep), r2 = r1;
+    RngUniforms u1(r1), u2(r2);
+    const Estimate c = estimate_cmis(f, m, 4, u1);
+    const Estimate mc = estimate_mc(f, exact, 4, u2);
+    expect_close(c.value, mc.value);
+    EXPECT_EQ(c.pdf_evals, 8);  // p(x | t) and p(x) per sample
+  }
+}
+
+TEST(Cmis, OverAnExtrudedTechniqueIsMc) {
+  const auto& f = integrand_1d("product");
+  const Classical1D c(PiecewiseConstantTechnique1D({0.0, 0.5, 0.8, 1.0}, {1.0, 3.0, 0.5}));
+  const ExtrudedTechnique<Classical1D> e{c};
+  for (uint64_t rep = 0; rep < 50; ++rep) {
+    Rng r1 = Rng::for_sample(29, 0, rep), r2 = r1;
+    RngUniforms u1(r1), u2(r2);
+    expect_close(estimate_cmis(f, e, 16, u1).value, estimate_mc(f, c, 16, u2).value);
+  }
+}
+
+TEST(Cmis, ClosedFormMarginalIsImportanceSamplingFromIt) {
+  // With the balance heuristic every term is f(x) / p(x): exact when f is proportional to p(x).
+  const UniformCentreNormal1D m(0.2, 0.7, 0.1, 0.2);
+  auto f = [&](double x) { return 2.5 * m.marginal_pdf(x); };
+  Rng r(31);
+  RngUniforms u(r);
+  for (int rep = 0; rep < 100; ++rep) EXPECT_NEAR(estimate_cmis(f, m, 8, u).value, 2.5, 1e-12);
 }
 
 TEST(MisHeuristics, WeightsSumToOne) {
