@@ -22,11 +22,13 @@ namespace tb::mcmc {
 // {pi(x), c_k(x) T_k(x -> y), pi(y), c_k(y) T_k(y -> x)}. When pi(y) = 0 the move is rejected
 // whatever T, so the densities are not evaluated (forward stands at 1). Every kernel over a
 // ProposalMixture forms its terms here: MetropolisHastings below and the path-space MLT driver.
+// c_x, c_y: c_k(x) and c_k(y) when the caller has them (a chain caches its state's selection);
+// negative: computed here.
 template <ProposalMixture M>
 MoveTerms mixture_terms(const M& mix, int k, const typename M::State& x, const typename M::State& y, double pi_x,
-                        double pi_y) {
+                        double pi_y, double c_x = -1.0, double c_y = -1.0) {
   if (!(pi_y > 0.0)) return {pi_x, 1.0, pi_y, 0.0};
-  const double cx = mix.selection(k, x), cy = mix.selection(k, y);
+  const double cx = c_x >= 0.0 ? c_x : mix.selection(k, x), cy = c_y >= 0.0 ? c_y : mix.selection(k, y);
   return {pi_x, cx > 0.0 ? cx * mix.density(k, x, y) : 0.0, pi_y, cy > 0.0 ? cy * mix.density(k, y, x) : 0.0};
 }
 

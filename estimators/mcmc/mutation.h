@@ -60,18 +60,26 @@ class MutationMixture {
     }
     return sum > 0.0 && wk > 0.0 ? wk / sum : 0.0;
   }
+  // All weights at x into w (resized); returns their sum. A chain caches them for its state.
+  double weights(const State& x, std::vector<double>* w) const {
+    w->resize(parts_.size());
+    double sum = 0.0;
+    for (size_t j = 0; j < parts_.size(); ++j) sum += (*w)[j] = parts_[j]->weight(x);
+    return sum;
+  }
   // The component for uniform v, by inversion of the running sum of weights (one pass over the
   // weights; -1 when no component applies at x).
   int select(const State& x, double v) const {
     thread_local std::vector<double> w;
-    w.resize(parts_.size());
-    double sum = 0.0;
-    for (size_t j = 0; j < parts_.size(); ++j) sum += w[j] = parts_[j]->weight(x);
+    return select_from(w, weights(x, &w), v);
+  }
+  // The same from weights already computed (w, their sum).
+  static int select_from(const std::vector<double>& w, double sum, double v) {
     if (!(sum > 0.0)) return -1;
     const double target = v * sum;
     double acc = 0.0;
     int last_positive = -1;
-    for (size_t j = 0; j < parts_.size(); ++j) {
+    for (size_t j = 0; j < w.size(); ++j) {
       if (w[j] > 0.0) last_positive = static_cast<int>(j);
       acc += w[j];
       if (target < acc && w[j] > 0.0) return static_cast<int>(j);

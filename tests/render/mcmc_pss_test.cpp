@@ -610,3 +610,38 @@ TEST(PssRender, NegativeControlNoTechniqueCountIsCaught) { expect_compare(true, 
 
 }  // namespace
 }  // namespace tb::pss
+
+namespace tb::pss {
+namespace {
+
+// Splats carry their path (pss_sample.h SplatPath) to the chain's target: MMLT's one technique
+// (s, t) with s + t = k + 1 vertices, read from the subpaths the sample function built.
+TEST(PssRender, SplatsCarryTheirPathToTheTarget) {
+  const auto world = load_scene_at_resolution("cornell-box.json", 8, 8);
+  const LightSampler sampler(*world);
+  const PathContext ctx{world.get(), &sampler};
+  const SampleFunction f = mmlt_sample_function(ctx, 8, 8, 3);
+  std::atomic<int64_t> seen{0}, wrong{0};
+  PssSettings p;
+  p.chains = 8;
+  p.target = [&](const std::vector<Splat>& splats) {
+    for (const Splat& s : splats) {
+      ++seen;
+      const SplatPath& q = s.path;
+      if (q.empty() || q.s < 0 || q.t < 1 || static_cast<int>(q.light->size()) < q.s ||
+          static_cast<int>(q.camera->size()) < q.t || q.s + q.t < 2 || q.s + q.t > 3 + 2)
+        ++wrong;
+    }
+    return target_value(splats);
+  };
+  RenderSettings st;
+  st.spp = 8;
+  st.passes = 1;
+  Film film(8, 8);
+  run_pss(f, st, p, film);
+  EXPECT_GT(seen.load(), 1000);
+  EXPECT_EQ(wrong.load(), 0);
+}
+
+}  // namespace
+}  // namespace tb::pss

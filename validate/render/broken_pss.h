@@ -22,6 +22,7 @@ class WithoutProposalRatio final : public PssMutation {
   std::string name() const override { return m_->name(); }
   double weight() const override { return m_->weight(); }
   bool independent() const override { return m_->independent(); }
+  bool symmetric() const override { return m_->symmetric(); }
   double scale(double pi, double y_ref) const override { return m_->scale(pi, y_ref); }
   void begin(PssState& s, double scale_x) const override { m_->begin(s, scale_x); }
   double log_reverse_over_forward(const PssMove&) const override { return 0.0; }  // the defect

@@ -113,12 +113,28 @@ struct Chain {
   const SampleFunction* f = nullptr;
   const PssSettings* pss = nullptr;
   const PssMutationList* mutations = nullptr;
+  const std::vector<double>* selection = nullptr;  // c_k of the list (state-independent)
+  const std::vector<double>* cumulative = nullptr;  // their running sums
   double scale_x = 0.0;  // the selected mutation's scale at x
+  // The current state's scale for mutation scale_k (-1: none cached), and the proposal's.
+  int scale_k = -1, pending_k = -1;
+  double scale_current = 0.0, scale_pending = 0.0;
 
   // ---- ScoredChain -------------------------------------------------------------------------------
-  int select(double v) const { return select_mutation(*mutations, v); }
+  int select(double v) const {  // inversion of the running sum of c_k (select_mutation's rule)
+    const std::vector<double>& cdf = *cumulative;
+    if (cdf.empty() || !(cdf.back() > 0.0)) return -1;
+    const double target = v * cdf.back();
+    int last = -1;
+    for (size_t k = 0; k < cdf.size(); ++k) {
+      const double w = cdf[k] - (k > 0 ? cdf[k - 1] : 0.0);
+      if (w > 0.0) last = static_cast<int>(k);
+      if (target < cdf[k] && w > 0.0) return static_cast<int>(k);
+    }
+    return last;
+  }
   bool propose(int k, Uniforms&);
-  mcmc::MoveTerms terms(int k) const;
+  mcmc::MoveTerms terms(int k);
   void accept();
   void reject() { state.reject(); }
 };
@@ -167,7 +183,7 @@ void visit_weights(const std::vector<Splat>& splats, const TargetFunction& targe
 
 bool Chain::propose(int k, Uniforms&) {
   const PssMutation& m = *(*mutations)[static_cast<size_t>(k)];
-  scale_x = m.scale(i_current, y_ref);
+  scale_x = k == scale_k ? scale_current : m.scale(i_current, y_ref);
   m.begin(state, scale_x);
   bool nonfinite = false;
   i_proposed = evaluate(*f, pss->target, level, state, &proposed, &nonfinite);
@@ -175,17 +191,25 @@ bool Chain::propose(int k, Uniforms&) {
   return true;  // a PSS proposal never fails (a zero target is rejected by the rule)
 }
 
-mcmc::MoveTerms Chain::terms(int k) const {
+mcmc::MoveTerms Chain::terms(int k) {
   const PssMutation& m = *(*mutations)[static_cast<size_t>(k)];
+  const double c = (*selection)[static_cast<size_t>(k)];
   LazyPssMove mv(state);
-  mv.reads_x = reads_current;
-  mv.reads_y = state.reads();
-  mv.sigma_x = scale_x;
-  mv.sigma_y = i_proposed > 0.0 ? m.scale(i_proposed, y_ref) : 0.0;
-  return pss_move_terms(m, selection_probability(*mutations, k), i_current, i_proposed, mv);
+  pending_k = -1;
+  if (!m.symmetric() && i_proposed > 0.0) {  // the move's reads and scales enter only an asymmetric ratio
+    mv.reads_x = reads_current;
+    mv.reads_y = state.reads();
+    mv.sigma_x = scale_x;
+    mv.sigma_y = m.scale(i_proposed, y_ref);
+    pending_k = k;
+    scale_pending = mv.sigma_y;
+  }
+  return pss_move_terms(m, c, i_current, i_proposed, mv);
 }
 
 void Chain::accept() {
+  scale_k = pending_k;
+  scale_current = scale_pending;
   state.accept();
   reads_current = state.current_reads();
   std::swap(current, proposed);
@@ -257,6 +281,11 @@ int64_t run_pss(const SampleFunction& f_in, const RenderSettings& st, const PssS
   const int64_t segment = std::max<int64_t>(1, pss.segment);
   const bool resample = pss.resample_levels || levels == 1;
   const PssMutationList mutations = pss.mutation_list();
+  std::vector<double> selection, cumulative;
+  for (size_t k = 0; k < mutations.size(); ++k) {
+    selection.push_back(selection_probability(mutations, static_cast<int>(k)));
+    cumulative.push_back(std::max(0.0, mutations[k]->weight()) + (k > 0 ? cumulative[k - 1] : 0.0));
+  }
   PssStats total;
   for (const auto& m : mutations) total.components.push_back({m->name(), {}});
   if (pss.count_visits) total.visits.assign(static_cast<size_t>(P), 0.0);
@@ -328,6 +357,9 @@ int64_t run_pss(const SampleFunction& f_in, const RenderSettings& st, const PssS
         c.f = &f;
         c.pss = &pss;
         c.mutations = &mutations;
+        c.selection = &selection;
+        c.cumulative = &cumulative;
+        c.scale_k = c.pending_k = -1;
         c.visits.clear();
         c.where.clear();
         c.width = film.width();

@@ -70,6 +70,8 @@ class PssMutation {
   virtual void begin(PssState& s, double scale_x) const = 0;
   // log T(y -> x) / T(x -> y) (0 for a symmetric mutation).
   virtual double log_reverse_over_forward(const PssMove&) const { return 0.0; }
+  // True when T(x -> y) = T(y -> x) for all pairs (the ratio is then not evaluated).
+  virtual bool symmetric() const { return false; }
   // log T(x -> y) on Lebesgue measure of [0,1)^n, n = x.size() (-inf outside the support).
   virtual double log_density(const DenseState& x, const DenseState& y, const PssMove& m) const = 0;
 };
@@ -79,7 +81,7 @@ using PssMutationList = std::vector<std::shared_ptr<const PssMutation>>;
 // The Hastings terms of a move by a mutation selected with probability c (chain_step.h): the
 // factor T(x -> y) common to both sides is dropped, so forward = c and reverse = c T(y->x)/T(x->y).
 inline mcmc::MoveTerms pss_move_terms(const PssMutation& m, double c, double pi_x, double pi_y, const PssMove& move) {
-  const double ratio = pi_y > 0.0 ? std::exp(m.log_reverse_over_forward(move)) : 1.0;
+  const double ratio = pi_y > 0.0 && !m.symmetric() ? std::exp(m.log_reverse_over_forward(move)) : 1.0;
   return {pi_x, c, pi_y, c * ratio};
 }
 

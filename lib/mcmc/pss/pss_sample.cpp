@@ -42,11 +42,11 @@ SampleFunction bdpt_sample_function(const PathContext& ctx, int width, int heigh
         const Connection c = connect_bdpt(ctx, light, cam, s, t, u, fault);
         if (is_black(c.value)) continue;
         if (t == 1)
-          out->push_back({c.raster, c.value});
+          out->push_back({c.raster, c.value, SplatPath{&light, &cam, s, t}});
         else
           L += c.value;
       }
-    if (!is_black(L)) out->push_back({raster, L});
+    if (!is_black(L)) out->push_back({raster, L, SplatPath{&light, &cam, -1, -1}});
   };
   return f;
 }
@@ -71,7 +71,7 @@ SampleFunction mmlt_sample_function(const PathContext& ctx, int width, int heigh
     const Connection c = connect_bdpt(ctx, light, cam, s, t, u);
     if (is_black(c.value)) return;
     const Rgb v = c.value * static_cast<double>(techniques);
-    out->push_back({t == 1 ? c.raster : raster, v});
+    out->push_back({t == 1 ? c.raster : raster, v, SplatPath{&light, &cam, s, t}});
   };
   return f;
 }

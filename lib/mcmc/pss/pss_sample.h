@@ -21,9 +21,24 @@
 
 namespace tb::pss {
 
+// The path a splat carries, for targets that need more than its value (a variance-bounding ratio,
+// a half-vector walk): the subpaths it was connected from and its technique (s light vertices,
+// t camera vertices; lib/path/path.h). A splat that sums several connections of the same subpaths
+// (BDPT's camera-raster splat) has s = t = -1. The pointers are valid until the sample function is
+// next evaluated on the same thread (the subpaths live in its thread-local buffers): a
+// TargetFunction may read them, a splat kept across mutations may not. Empty for estimators that
+// keep no vertices (radiance_sample_function).
+struct SplatPath {
+  const std::vector<PathVertex>* light = nullptr;
+  const std::vector<PathVertex>* camera = nullptr;
+  int s = -1, t = -1;
+  bool empty() const { return light == nullptr && camera == nullptr; }
+};
+
 struct Splat {
   Vec2 raster{0.0};
   Rgb value{0.0};
+  SplatPath path{};
 };
 
 // A sample function over a discrete level (the path length of MMLT; PSSMLT has one level) and

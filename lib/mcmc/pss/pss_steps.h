@@ -21,6 +21,7 @@ class LargeStep final : public PssMutation {
   std::string name() const override { return "large step"; }
   double weight() const override { return p_; }
   bool independent() const override { return true; }
+  bool symmetric() const override { return true; }
   double scale(double, double) const override { return 0.0; }
   void begin(PssState& s, double) const override { s.start_iteration(true); }
   double log_density(const DenseState& x, const DenseState& y, const PssMove& m) const override;
@@ -34,6 +35,7 @@ class SmallStep final : public PssMutation {
   explicit SmallStep(const PssStepSettings& s) : w_(1.0 - s.large_step_probability), sigma_(s.sigma) {}
   std::string name() const override { return "small step"; }
   double weight() const override { return w_; }
+  bool symmetric() const override { return true; }
   double scale(double, double) const override { return sigma_; }
   void begin(PssState& s, double) const override {
     s.set_rescaled(false);
