@@ -87,7 +87,8 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   if (!report.mutations.empty()) {
     nlohmann::json m = nlohmann::json::array();
     for (const auto& r : report.mutations)
-      m.push_back({{"name", r.name}, {"proposed", r.proposed}, {"accepted", r.accepted}, {"acceptance", r.acceptance()}});
+      m.push_back({{"name", r.name}, {"proposed", r.proposed}, {"accepted", r.accepted}, {"acceptance", r.acceptance()},
+                   {"errors", r.errors}});
     rec["mutations"] = m;
     rec["mutations_total"] = report.mutations_total;
     rec["mutations_per_second"] = report.mutations_per_second;
@@ -99,9 +100,15 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
              film.nonfinite().count());
   if (!report.mutations.empty()) {
     fmt::print("{} mutations, {:.3g} mutations/s; acceptance:", report.mutations_total, report.mutations_per_second);
-    for (const auto& r : report.mutations)
+    int64_t errors = 0;
+    for (const auto& r : report.mutations) {
       fmt::print(" {} {:.3f} ({} proposed)", r.name, r.acceptance(), r.proposed);
+      errors += r.errors;
+    }
     fmt::print("\n");
+    if (errors > 0)
+      fmt::print("{} proposed moves with a stated forward density of 0 or non-finite Hastings terms (never accepted): "
+                 "a mutation misstates its density\n", errors);
   }
   if (film.nonfinite().count() > 0)
     fmt::print("{} (replay: tb render {} --integrator {} --seed {})\n", film.nonfinite().summary(), a.scene,

@@ -26,6 +26,7 @@ struct MutationReport {
   std::string name;
   int64_t proposed = 0;
   int64_t accepted = 0;
+  int64_t errors = 0;  // proposed moves with a stated forward density of 0 or non-finite Hastings terms
   double acceptance() const { return proposed > 0 ? static_cast<double>(accepted) / static_cast<double>(proposed) : 0.0; }
 };
 struct RunReport {

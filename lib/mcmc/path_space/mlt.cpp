@@ -161,7 +161,8 @@ int64_t render_mlt(const World& world, const RenderSettings& settings, Film& fil
   const path_space::MltStats stats = path_space::run_mlt(world, settings, film);
   if (settings.report) {
     settings.report->mutations.clear();
-    for (const auto& m : stats.mutations) settings.report->mutations.push_back({m.name, m.proposed, m.accepted});
+    for (const auto& m : stats.mutations)
+      settings.report->mutations.push_back({m.name, m.proposed, m.accepted, m.errors});
     settings.report->mutations_total = stats.mutations_total;
     settings.report->mutations_per_second = stats.mutations_per_second();
   }

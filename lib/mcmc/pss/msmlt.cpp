@@ -207,10 +207,11 @@ void fill_msmlt_report(const pss::MultiStageStats& s, RunReport* report) {
   if (!report) return;
   const pss::PssStats& f = s.final_stage;
   const pss::PssStats& g = s.guides;
-  report->mutations = {{"large step", f.large_proposed, f.large_accepted},
-                       {"small step", f.small_proposed, f.small_accepted},
-                       {"guide stages: large step", g.large_proposed, g.large_accepted},
-                       {"guide stages: small step", g.small_proposed, g.small_accepted}};
+  // Every registered mutation the stages ran, film stage first.
+  report->mutations.clear();
+  for (const auto& [name, c] : f.components) report->mutations.push_back({name, c.proposed, c.accepted, c.errors});
+  for (const auto& [name, c] : g.components)
+    report->mutations.push_back({"guide stages: " + name, c.proposed, c.accepted, c.errors});
   report->mutations_total = f.mutations + g.mutations;
   const double sec = f.mutation_seconds + g.mutation_seconds;
   report->mutations_per_second = sec > 0.0 ? static_cast<double>(f.mutations + g.mutations) / sec : 0.0;

@@ -436,7 +436,7 @@ void fill_report(const PssStats& s, RunReport* report, const char* small_step_na
   if (!report) return;
   (void)small_step_name;
   report->mutations.clear();
-  for (const auto& [name, c] : s.components) report->mutations.push_back({name, c.proposed, c.accepted});
+  for (const auto& [name, c] : s.components) report->mutations.push_back({name, c.proposed, c.accepted, c.errors});
   report->mutations_total = s.mutations;
   report->mutations_per_second = s.mutations_per_second();
 }
