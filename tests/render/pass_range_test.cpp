@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "lib/core/parallel.h"
 #include "lib/film/film.h"
 #include "lib/registry/integrator_registry.h"
 #include "validate/render/render_compare.h"
@@ -43,6 +44,24 @@ TEST(PassRange, RangesCutAnywhereGiveTheSameFilm) {
       }
     }
     EXPECT_EQ(passes, 6) << integ.name;
+  }
+}
+
+// Every registered integrator gives bit-identical Welch sums on one thread and on all of them.
+TEST(PassRange, EveryIntegratorBitIdenticalAcrossThreadCounts) {
+  const auto world = load_scene_at_resolution("cornell-box.json", 8, 8);
+  for (const IntegratorInfo& integ : integrators()) {
+    const WelchImage all = render_ranges(integ, *world, {{0, -1}});
+    WelchImage one;
+    {
+      const ThreadLimit limit(1);
+      one = render_ranges(integ, *world, {{0, -1}});
+    }
+    for (size_t i = 0; i < all.pixels(); ++i)
+      for (int c = 0; c < 3; ++c) {
+        ASSERT_EQ(all.sum[i][c], one.sum[i][c]) << integ.name << " pixel " << i;
+        ASSERT_EQ(all.sum_sq[i][c], one.sum_sq[i][c]) << integ.name << " pixel " << i;
+      }
   }
 }
 
