@@ -17,6 +17,7 @@
 #include "validate/mcmc/flux_symmetry.h"
 #include "validate/mcmc/kernels.h"
 #include "validate/mcmc/pairwise_balance.h"
+#include "validate/mcmc/pairwise_record.h"
 #include "validate/mcmc/proposal_chi2.h"
 #include "validate/mcmc/rj_jacobian.h"
 #include "validate/mcmc/stationarity.h"
@@ -58,16 +59,7 @@ CheckResult run_pairwise(const K& k, const CheckContext& ctx, const std::string&
   using S = typename K::State;
   const auto r = check_pairwise_balance<K>(k, [&](Uniforms& u) -> S { return t.sample_exact(u); },
                                            ctx.size(10000, 100000), ctx.seed, key_of(name));
-  CheckResult res;
-  res.passed = r.passed;
-  res.statistic_name = "max relative |F - B|";
-  res.statistic = r.max_rel_residual;
-  res.samples = r.pairs;
-  res.message = r.message;
-  res.details = {{"live_pairs", r.live}, {"violations", r.violations}, {"worst_index", r.worst_index},
-                 {"failed_proposals", r.failed_proposals}, {"nonfinite", r.nonfinite}, {"tolerance", r.tolerance},
-                 {"reproducer", fmt::format("Rng::for_sample(seed, hash_string(\"{}\"), {})", name, r.worst_index)}};
-  return res;
+  return pairwise_record(r, name);
 }
 
 template <class K>

@@ -55,6 +55,7 @@
 #include "validate/chi2/sampler_chi2.h"
 #include "validate/mcmc/broken_variants.h"
 #include "validate/mcmc/pairwise_balance.h"
+#include "validate/mcmc/pairwise_record.h"
 #include "validate/mcmc/registered_mutations.h"
 #include "validate/registry.h"
 #include "validate/render/broken_path_mutations.h"
@@ -156,19 +157,7 @@ CheckResult run_pairwise(const Mut& mut, Ref ref, const CheckContext& cx, const 
   const std::function<MltPath(Uniforms&)> start = start_paths(sc.ctx, dirac_only, applies);
   const auto r = mcmc::check_pairwise_balance<WithReferenceDensity<K, decltype(r0)>>(
       k, start, cx.size(400, 10000), cx.seed, hash_string(name));
-  CheckResult res;
-  res.passed = r.passed;
-  res.statistic_name = "max relative |F - B|";
-  res.statistic = r.max_rel_residual;
-  res.samples = r.pairs;
-  res.message = r.message;
-  res.details = {{"live_pairs", r.live},
-                 {"violations", r.violations},
-                 {"worst_index", r.worst_index},
-                 {"failed_proposals", r.failed_proposals},
-                 {"tolerance", r.tolerance},
-                 {"reproducer", fmt::format("Rng::for_sample(seed, hash_string(\"{}\"), {})", name, r.worst_index)}};
-  return res;
+  return pairwise_record(r, name);
 }
 
 CheckResult bidir_pairwise(BidirFault fault, const CheckContext& cx, const std::string& name,

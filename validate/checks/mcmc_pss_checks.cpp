@@ -44,6 +44,7 @@
 #include "validate/mcmc/broken_variants.h"
 #include "validate/mcmc/flux_symmetry.h"
 #include "validate/mcmc/pairwise_balance.h"
+#include "validate/mcmc/pairwise_record.h"
 #include "validate/mcmc/registered_mutations.h"
 #include "validate/registry.h"
 #include "validate/render/broken_pss.h"
@@ -107,16 +108,7 @@ CheckResult pairwise(const K& kernel, const CheckContext& ctx, const std::string
     return x;
   };
   const auto r = mcmc::check_pairwise_balance<K>(kernel, start, ctx.size(2000, 20000), ctx.seed, hash_string(name));
-  CheckResult res;
-  res.passed = r.passed;
-  res.statistic_name = "max relative |F - B|";
-  res.statistic = r.max_rel_residual;
-  res.samples = r.pairs;
-  res.message = r.message;
-  res.details = {{"live_pairs", r.live}, {"violations", r.violations}, {"worst_index", r.worst_index},
-                 {"failed_proposals", r.failed_proposals}, {"nonfinite", r.nonfinite}, {"tolerance", r.tolerance},
-                 {"reproducer", fmt::format("Rng::for_sample(seed, hash_string(\"{}\"), {})", name, r.worst_index)}};
-  return res;
+  return pairwise_record(r, name);
 }
 
 enum class Mutation { kSmall, kLarge, kMixture };

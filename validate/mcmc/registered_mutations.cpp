@@ -15,6 +15,7 @@
 #include "lib/mcmc/pss/pss_kernel.h"
 #include "lib/path/light_sampler.h"
 #include "validate/mcmc/pairwise_balance.h"
+#include "validate/mcmc/pairwise_record.h"
 #include "validate/mcmc/path_space/reference_density.h"
 #include "validate/render/render_compare.h"
 
@@ -34,16 +35,6 @@ struct Box {
   std::unique_ptr<LightSampler> lights;
   PathContext ctx;
 };
-
-CheckResult record(const mcmc::PairwiseBalanceResult& r) {
-  CheckResult res;
-  res.passed = r.passed;
-  res.statistic_name = "max relative |F - B|";
-  res.statistic = r.max_rel_residual;
-  res.samples = r.pairs;
-  res.message = r.message;
-  return res;
-}
 
 // Folds per-mutation records into one.
 struct Summary {
@@ -93,7 +84,7 @@ CheckResult pss_registered_mutations_pairwise(const CheckContext& ctx, const std
     };
     const auto r = mcmc::check_pairwise_balance<PssKernel>(kernel, start, ctx.size(1000, 10000), ctx.seed,
                                                            hash_string(name + "." + info.name));
-    s.add(info.name, record(r), &per);
+    s.add(info.name, pairwise_record(r, name + "." + info.name), &per);
   }
   s.all.message = fmt::format("{} registered PSS mutations: {}", pss_mutations().size(), s.msg);
   s.all.details["mutations"] = per;
@@ -136,7 +127,7 @@ CheckResult path_registered_mutations_pairwise(const CheckContext& ctx, const st
       const WithReferenceDensity<K, decltype(ref)> k(kernel, ref, b == 0 ? 8 : 64);
       const auto r = mcmc::check_pairwise_balance<WithReferenceDensity<K, decltype(ref)>>(
           k, start, ctx.size(400, 10000), ctx.seed, hash_string(name + "." + m.name()));
-      last = record(r);
+      last = pairwise_record(r, name + "." + m.name());
       last.message = scenes[b] + ": " + last.message;
       if (2 * r.live >= r.pairs) break;  // enough pairs with flux on this scene
     }
