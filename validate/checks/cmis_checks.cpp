@@ -38,12 +38,7 @@ const std::vector<UniformCentreNormal1D>& techniques() {
 CheckResult run_unbiased(const CheckContext& ctx) {
   // 2^22 (full) or 2^15 (quick) x-samples per technique-problem pair, 8 per realisation.
   const int64_t realisations = ctx.size(int64_t{1} << 12, int64_t{1} << 19);
-  struct Case {
-    std::string name;
-    Realisation r;
-    double truth;
-  };
-  std::vector<Case> cases;
+  std::vector<checks::UnbiasedCase> cases;
   // Support condition: both marginals are positive on all of R. The singular integrand is left out
   // (finite variance needed by the t-test), as in mmis.unbiased.
   for (const auto& m : techniques())
@@ -52,47 +47,8 @@ CheckResult run_unbiased(const CheckContext& ctx) {
       cases.push_back({fmt::format("cmis_balance_n8_{}/{}", m.name(), g.name),
                        [&g, &m](Uniforms& u) { return estimate_cmis(g, m, kSamplesPerRealisation, u).value; }, g.integral});
     }
-  const double alpha = stats::sidak_alpha(kFamilyAlpha, static_cast<int64_t>(cases.size()));
-  CheckResult res;
-  res.alpha = alpha;
-  res.statistic_name = "min p";
-  res.statistic = 1.0;
-  res.passed = true;
-  nlohmann::json per_case = nlohmann::json::array();
-  std::string worst;
-  double worst_mdb_rel = 0.0;
-  for (size_t i = 0; i < cases.size(); ++i) {
-    const auto o = checks::test_unbiased(cases[i].name, cases[i].r, cases[i].truth, realisations, kBatches, ctx.seed,
-                                         hash_values(hash_string("cmis.unbiased"), i), alpha);
-    per_case.push_back({{"case", o.name}, {"truth", o.truth}, {"mean", o.mean}, {"std_error", o.std_error},
-                        {"t", o.t}, {"p", o.p_value}, {"min_detectable_bias", o.min_detectable_bias},
-                        {"nonfinite", o.nonfinite}, {"rejected", o.rejected}});
-    worst_mdb_rel = std::max(worst_mdb_rel, o.min_detectable_bias / std::abs(o.truth));
-    if (o.p_value < res.statistic) {
-      res.statistic = o.p_value;
-      worst = o.name;
-    }
-    if (o.rejected) {
-      res.passed = false;
-      res.message += fmt::format("{}: mean {:.6g} vs {:.6g} (t = {:.2f}, p = {:.2g}); ", o.name, o.mean, o.truth, o.t, o.p_value);
-    }
-    res.samples += o.realisations * kSamplesPerRealisation;
-    ctx.progress(static_cast<double>(i + 1) / static_cast<double>(cases.size()));
-  }
-  res.p_value = res.statistic;
-  res.details["cases"] = per_case;
-  res.details["family_alpha"] = kFamilyAlpha;
-  res.details["correction"] = "Sidak over all technique-problem pairs";
-  res.details["batches"] = kBatches;
-  res.details["realisations_per_case"] = realisations;
-  res.details["worst_relative_min_detectable_bias_90pct_power"] = worst_mdb_rel;
-  if (res.passed)
-    res.message = fmt::format("{} technique/problem pairs unbiased (t-test of {} batch means, alpha' = {:.2g}); smallest p = "
-                              "{:.3g} ({}); detectable relative bias at 90% power <= {:.2g}",
-                              cases.size(), kBatches, alpha, res.statistic, worst, worst_mdb_rel);
-  else
-    res.message = "biased: " + res.message;
-  return res;
+  return checks::unbiased_family(ctx, cases, hash_string("cmis.unbiased"), realisations, kBatches, kFamilyAlpha, kSamplesPerRealisation,
+                                 "technique/problem", "Sidak over all technique-problem pairs");
 }
 
 TB_REGISTER_CHECK({.name = "cmis.unbiased",

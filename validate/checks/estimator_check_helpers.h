@@ -10,9 +10,16 @@
 #include <string>
 #include <vector>
 
+#include <algorithm>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "lib/core/hash.h"
 #include "lib/core/parallel.h"
 #include "lib/core/rng.h"
 #include "lib/core/uniforms.h"
+#include "validate/registry.h"
 #include "validate/stats/tests.h"
 #include "validate/stats/welford.h"
 
@@ -79,6 +86,62 @@ inline stats::Welford replicate_moments(const Realisation& r, int64_t replicates
   stats::Welford all;
   for (const auto& w : ws) all.merge(w);
   return all;
+}
+
+// A family of unbiasedness cases under one check: each case's t-test at the Šidák-corrected level
+// of family_alpha over the cases, one record with per-case details, the smallest p and the largest
+// relative bias detectable at 90% power. `key` seeds the cases' streams (hash_values(key, i));
+// `what` names the pairs in the message ("technique/problem").
+struct UnbiasedCase {
+  std::string name;
+  Realisation r;
+  double truth = 0.0;
+};
+inline CheckResult unbiased_family(const CheckContext& ctx, const std::vector<UnbiasedCase>& cases, uint64_t key,
+                                   int64_t realisations, int batches, double family_alpha,
+                                   int64_t samples_per_realisation, const std::string& what,
+                                   const std::string& correction) {
+  const double alpha = stats::sidak_alpha(family_alpha, static_cast<int64_t>(cases.size()));
+  CheckResult res;
+  res.alpha = alpha;
+  res.statistic_name = "min p";
+  res.statistic = 1.0;
+  res.passed = true;
+  nlohmann::json per_case = nlohmann::json::array();
+  std::string worst;
+  double worst_mdb_rel = 0.0;
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const auto o =
+        test_unbiased(cases[i].name, cases[i].r, cases[i].truth, realisations, batches, ctx.seed, hash_values(key, i), alpha);
+    per_case.push_back({{"case", o.name}, {"truth", o.truth}, {"mean", o.mean}, {"std_error", o.std_error},
+                        {"t", o.t}, {"p", o.p_value}, {"min_detectable_bias", o.min_detectable_bias},
+                        {"nonfinite", o.nonfinite}, {"rejected", o.rejected}});
+    worst_mdb_rel = std::max(worst_mdb_rel, o.min_detectable_bias / std::abs(o.truth));
+    if (o.p_value < res.statistic) {
+      res.statistic = o.p_value;
+      worst = o.name;
+    }
+    if (o.rejected) {
+      res.passed = false;
+      res.message += fmt::format("{}: mean {:.6g} vs {:.6g} (t = {:.2f}, p = {:.2g}); ", o.name, o.mean, o.truth, o.t, o.p_value);
+    }
+    res.samples += o.realisations * samples_per_realisation;
+    ctx.progress(static_cast<double>(i + 1) / static_cast<double>(cases.size()));
+  }
+  res.p_value = res.statistic;
+  res.details["cases"] = per_case;
+  res.details["family_alpha"] = family_alpha;
+  res.details["correction"] = correction;
+  res.details["batches"] = batches;
+  res.details["realisations_per_case"] = realisations;
+  res.details["worst_relative_min_detectable_bias_90pct_power"] = worst_mdb_rel;
+  if (res.passed)
+    res.message = fmt::format("{} {} pairs unbiased (t-test of {} batch means, alpha' = {:.2g}); smallest p = "
+                              "{:.3g} ({}); detectable relative bias at 90% power <= {:.2g}",
+                              cases.size(), what, batches, alpha, res.statistic, worst, worst_mdb_rel);
+  else
+    res.message = "biased: " + res.message;
+  return res;
 }
 
 }  // namespace tb::checks
