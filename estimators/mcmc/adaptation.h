@@ -96,7 +96,8 @@ class RegionalAdaptation {
   double gamma(int j) const { return Update::gamma(o_, j); }
   const std::vector<AdaptationUpdateRecord>& record() const { return record_; }
 
-  // Algorithm 1, lines 11-18.
+  // Algorithm 1, lines 11-18. The update fires on the L-th visit, so a_hat is the mean of exactly
+  // L acceptances (line 14 divides by L; line 13's "i_k > L" would average L + 1 of them).
   void observe(int r, double acceptance) {
     sum_[r] += acceptance;                       // line 11
     if (++visits_[r] < o_.batch) return;         // lines 12-13

@@ -6,8 +6,10 @@
 // proposal (line 11), then all observations are applied to the adapter in chain order, each
 // chain's in step order. The result is a function of (seed, key, chain count, batch length) only,
 // bit-identical whatever the number of threads. Within a batch the kernel is a fixed
-// Metropolis-Hastings kernel (reversible with respect to pi); a batch with the same lambda for
-// all chains is L visits apart in the same way as in Algorithm 1, only applied later.
+// Metropolis-Hastings kernel (reversible with respect to pi). The price: every observation of a
+// batch is taken at one lambda, and a region receiving n visits in a batch makes about n / L
+// updates from it; chains x steps per batch of about L x regions keeps that near one update per
+// region per batch, as in Algorithm 1 (docs/mcmc.md measures what a long batch does to Eq. 5).
 //
 // The kernel K reads the adapter's current lambda through its mutation (a const reference held by
 // the mutation); run_batch is the only place the adapter changes.

@@ -97,8 +97,8 @@ class GridPartition final : public RegionPartition<std::array<double, N>> {
 static_assert(Partition<FixedPartition<1>> && Partition<GlobalPartition<2>> && Partition<GridPartition<2>>);
 static_assert(Partition<RegionPartition<std::array<double, 1>>>);
 
-// The box and grid a registered partition is built over (the grid ignores nothing; one-region
-// partitions ignore it).
+// What a registered partition is built from: a box of R^N and cells per dimension (used by the
+// grid; the one-region partitions ignore it).
 template <size_t N>
 struct PartitionBox {
   std::array<double, N> lo{}, hi{};

@@ -36,6 +36,7 @@ struct ConstantGammaSignUpdate {
 };
 
 // The regional kernel with the reverse density misstated: T(y -> x) computed with sigma(region(x)).
+// K: the MetropolisHastings kernel of regional_adaptive_kernel<1> (single component, c = 1).
 template <class K>
 class ReverseRegionOfX {
  public:
