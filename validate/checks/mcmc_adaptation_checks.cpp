@@ -19,6 +19,7 @@
 #include "lib/core/hash.h"
 #include "validate/mcmc/adaptation_runs.h"
 #include "validate/mcmc/pairwise_balance.h"
+#include "validate/mcmc/proposal_chi2.h"
 #include "validate/mcmc/stationarity.h"
 #include "validate/registry.h"
 
@@ -86,6 +87,37 @@ CheckResult run_pairwise(const CheckContext& ctx, const std::string& name, Wrap 
   res.message = r.message + fmt::format("; {} pairs cross the region boundary (at least 10% required)", crossing);
   res.details = {{"crossing_pairs", crossing}, {"violations", r.violations}, {"worst_index", r.worst_index},
                  {"tolerance", r.tolerance}};
+  return res;
+}
+
+// ---- the regional walk samples its stated density, from a state of each region -------------------
+// Frozen sigma = 0.25 / 4; x = -0.5 (region 0) and x = 2 (region 1), each at alpha / 2 (Sidak ~).
+template <bool kMisstated>
+CheckResult run_proposal_chi2(const CheckContext& ctx, const std::string& name) {
+  const auto part = make_partition<1>("grid", two_scale_box());
+  OtsuAdaptation ad(part->regions(), {});
+  ad.set_lambda(0, std::log(0.25 * 0.25));
+  ad.set_lambda(1, std::log(4.0 * 4.0));
+  const RegionalAdaptiveWalk<1, RegionPartition<Point<1>>, OtsuAdaptation> correct(part, &ad);
+  const auto walk = [&] {
+    if constexpr (kMisstated)
+      return MisstatedRegionalScale(correct);
+    else
+      return correct;
+  }();
+  const auto r0 = check_proposal_chi2_1d(walk, Point<1>{-0.5}, -1.75, 0.75, ctx.size(100000, 1000000), ctx.seed,
+                                         key_of(name + ".0"));
+  const auto r1 = check_proposal_chi2_1d(walk, Point<1>{2.0}, -18.0, 22.0, ctx.size(100000, 1000000), ctx.seed,
+                                         key_of(name + ".1"));
+  CheckResult res;
+  res.alpha = kAlpha / 2;
+  res.passed = r0.passed(kAlpha / 2) && r1.passed(kAlpha / 2);
+  res.statistic_name = "min p over the two regions";
+  res.p_value = std::min(r0.p_value(), r1.p_value());
+  res.statistic = res.p_value;
+  res.samples = r0.samples + r1.samples;
+  res.message = "from x = -0.5 (sigma 0.25): " + r0.message() + "; from x = 2 (sigma 4): " + r1.message();
+  res.details = {{"region0", r0.details()}, {"region1", r1.details()}};
   return res;
 }
 
@@ -231,6 +263,14 @@ const bool registered = [] {
       "Negative control: the pairwise checker must reject T(y->x) evaluated with the scale of x's region",
       [=](const CheckContext& c) {
         return negate(run_pairwise(c, "mcmc.adaptation.negative_control.reverse_region_of_x.pairwise", broken));
+      });
+  add("mcmc.adaptation.two_scale.grid.proposal_chi2", CheckKind::kStatistical,
+      "Regional random walk at frozen lambda samples its stated density from a state of each region (chi-square)",
+      [](const CheckContext& c) { return run_proposal_chi2<false>(c, "mcmc.adaptation.two_scale.grid.proposal_chi2"); });
+  add("mcmc.adaptation.negative_control.misstated_scale.proposal_chi2", CheckKind::kStatistical,
+      "Negative control: the proposal chi-square must reject a regional walk stating a scale 5% off",
+      [](const CheckContext& c) {
+        return negate(run_proposal_chi2<true>(c, "mcmc.adaptation.negative_control.misstated_scale.proposal_chi2"));
       });
   add("mcmc.adaptation.two_scale.grid.convergence", CheckKind::kStatistical,
       "Otsu sign update (Eq. 5) on a 2-cell grid: per-region acceptance at frozen lambda within 0.02 of a* = 0.5",

@@ -63,6 +63,20 @@ class ReverseRegionOfX {
   K k_;
 };
 
+// The regional walk stating its density with a scale 5% larger than the regional one it samples
+// with (a Proposal, for the proposal chi-square's negative control).
+template <class Walk>
+class MisstatedRegionalScale {
+ public:
+  using State = typename Walk::State;
+  explicit MisstatedRegionalScale(const Walk& w) : w_(w) {}
+  std::optional<State> propose(const State& x, Uniforms& u) const { return w_.propose(x, u); }
+  double density(const State& x, const State& y) const { return Walk::density_with_scale(x, y, 1.05 * w_.scale(x)); }
+
+ private:
+  const Walk& w_;
+};
+
 // One adaptation run on the two-scale target: `chains` chains from exact draws, `batches`
 // synchronous batches of `steps` transitions (adaptive_chains.h).
 template <class Update>
