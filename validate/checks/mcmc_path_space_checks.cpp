@@ -229,15 +229,7 @@ CheckResult mixture_pairwise(Rule rule, const CheckContext& cx, const std::strin
   const std::function<MltPath(Uniforms&)> start = start_paths(sc.ctx, dirac_only);
   const auto r = mcmc::check_pairwise_balance<WithReferenceDensity<K, decltype(ref)>>(
       k, start, cx.size(600, 10000), cx.seed, hash_string(name));
-  CheckResult res;
-  res.passed = r.passed;
-  res.statistic_name = "max relative |F - B|";
-  res.statistic = r.max_rel_residual;
-  res.samples = r.pairs;
-  res.message = r.message;
-  res.details = {{"live_pairs", r.live}, {"violations", r.violations}, {"worst_index", r.worst_index},
-                 {"tolerance", r.tolerance}};
-  return res;
+  return pairwise_record(r, name);
 }
 
 // ---- chi-square in projections --------------------------------------------------------------------
