@@ -10,6 +10,7 @@
 
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -110,5 +111,24 @@ class ProposalMutation final : public Mutation<typename P::State> {
   double weight_;
   P p_;
 };
+
+// A registry table of mutation entries (each with a `name`): lookup, run-time registration (a name
+// registered twice is an error) and removal. The state spaces' registries (path space, primary
+// sample space) are such tables.
+template <class Info>
+const Info* find_named(const std::vector<Info>& table, const std::string& name) {
+  for (const Info& e : table)
+    if (e.name == name) return &e;
+  return nullptr;
+}
+template <class Info>
+void add_named(std::vector<Info>& table, Info info, const char* what) {
+  if (find_named(table, info.name)) throw std::invalid_argument(std::string(what) + " registered twice: " + info.name);
+  table.push_back(std::move(info));
+}
+template <class Info>
+void remove_named(std::vector<Info>& table, const std::string& name) {
+  std::erase_if(table, [&](const Info& e) { return e.name == name; });
+}
 
 }  // namespace tb::mcmc

@@ -826,6 +826,15 @@ const bool registered = [] {
       "against its reference density",
       CheckKind::kDeterministic,
       [](const CheckContext& cx, const std::string& n) { return path_registered_mutations_pairwise(cx, n); });
+  add(p + "negative_control.registered_mutations_lens_no_ratio.pairwise",
+      "Negative control: the registered-mutations pairwise check must reject the registry with the lens perturbation's "
+      "T stated as a constant",
+      CheckKind::kDeterministic, [](const CheckContext& cx, const std::string& n) {
+        return negate(path_registered_mutations_pairwise(
+            cx, n, [](std::shared_ptr<const PathMutation> m) -> std::shared_ptr<const PathMutation> {
+              return m->name() == "lens" ? std::make_shared<const LensWithoutDensityRatio>(m) : m;
+            }));
+      });
   add(p + "mixture.pairwise",
       "The MLT kernel (bidirectional + lens + caustic, length-dependent selection): pi c T a symmetric to 1e-9",
       CheckKind::kDeterministic, [](const CheckContext& cx, const std::string& n) {

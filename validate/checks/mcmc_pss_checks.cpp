@@ -718,6 +718,23 @@ const bool registered = [] {
       .run = [](const CheckContext& ctx) {
         return pss_registered_mutations_pairwise(ctx, "mcmc.pss.cornell.registered_mutations.pairwise");
       }});
+  // Its negative control: every registered mutation wrapped with its T ratio dropped; the
+  // asymmetric one (the rescaled small step) must then violate balance.
+  Registry::global().add(Check{
+      .name = "mcmc.pss.negative_control.registered_mutations_no_ratio.pairwise",
+      .description = "the registered-mutations pairwise check must reject the registry with every T(y->x)/T(x->y) "
+                     "dropped (WithoutProposalRatio)",
+      .kind = CheckKind::kDeterministic,
+      .run = [](const CheckContext& ctx) {
+        CheckResult r = pss_registered_mutations_pairwise(
+            ctx, "mcmc.pss.negative_control.registered_mutations_no_ratio.pairwise",
+            [](std::shared_ptr<const PssMutation> m) -> std::shared_ptr<const PssMutation> {
+              return std::make_shared<const WithoutProposalRatio>(m);
+            });
+        r.passed = !r.passed;
+        r.message = (r.passed ? "broken variant rejected as required: " : "BROKEN VARIANT NOT DETECTED: ") + r.message;
+        return r;
+      }});
   Registry::global().add(Check{
       .name = "render.msmlt.cornell.visits_cv",
       .description = "coefficient of variation of mutations per pixel: multi-stage MLT below PSSMLT (Zirr 2020, Fig. 6)",

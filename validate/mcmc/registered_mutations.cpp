@@ -55,7 +55,8 @@ struct Summary {
 
 }  // namespace
 
-CheckResult pss_registered_mutations_pairwise(const CheckContext& ctx, const std::string& name) {
+CheckResult pss_registered_mutations_pairwise(const CheckContext& ctx, const std::string& name,
+                                              const PssMutationWrap& wrap) {
   using namespace pss;
   const Box box;
   RenderSettings rs;
@@ -73,7 +74,9 @@ CheckResult pss_registered_mutations_pairwise(const CheckContext& ctx, const std
   Summary s;
   nlohmann::json per = nlohmann::json::object();
   for (const PssMutationInfo& info : pss_mutations()) {
-    const PssKernel kernel(f, 0, make_pss_mutations({info.name}, defaults.step_settings()), defaults.sigma, y_ref);
+    PssMutationList one = make_pss_mutations({info.name}, defaults.step_settings());
+    if (wrap) one[0] = wrap(one[0]);
+    const PssKernel kernel(f, 0, one, defaults.sigma, y_ref);
     const auto start = [&kernel](Uniforms& u) {
       DenseState x0(kStreams * kPerStream);
       for (int tries = 0; tries < 64; ++tries) {  // any start sampler is valid; prefer pi(x) > 0
@@ -92,7 +95,8 @@ CheckResult pss_registered_mutations_pairwise(const CheckContext& ctx, const std
   return s.all;
 }
 
-CheckResult path_registered_mutations_pairwise(const CheckContext& ctx, const std::string& name) {
+CheckResult path_registered_mutations_pairwise(const CheckContext& ctx, const std::string& name,
+                                               const PathMutationWrap& wrap) {
   using namespace path_space;
   // The Cornell box first; a mutation with too few pairs carrying flux there (one that acts on
   // specular chains only) is checked on the caustic scene, from start paths it applies to.
@@ -108,7 +112,12 @@ CheckResult path_registered_mutations_pairwise(const CheckContext& ctx, const st
     CheckResult last;
     for (size_t b = 0; b < boxes.size(); ++b) {
       const PathContext& pc = boxes[b]->ctx;
-      const PathMutationList list = make_path_mutations(pc, ms);
+      PathMutationList list = make_path_mutations(pc, ms);
+      // The reference is that of the registered mutation; a wrapper (negative control) is checked
+      // against it, so a density it misstates is seen.
+      const auto ref_one = reference_density_of(*list[i], pc);
+      const std::shared_ptr<const PathMutation> keep = list[i];
+      if (wrap) list[i] = wrap(list[i]);
       const PathMutation& m = *list[i];
       const auto start = [&pc, &m](Uniforms& u) {
         MltPath any;
@@ -121,7 +130,6 @@ CheckResult path_registered_mutations_pairwise(const CheckContext& ctx, const st
       };
       const auto kernel = mcmc::MetropolisHastings(PathTarget{&pc}, mcmc::SingleProposal(MutationProposal{&m, nullptr}));
       using K = decltype(kernel);
-      const auto ref_one = reference_density_of(m, pc);
       const auto ref = [&ref_one](int, const MltPath& x, const MltPath& y) { return ref_one(x, y); };
       // Redraws of proposals without flux: more on the specular scene, where many end on a changed chain.
       const WithReferenceDensity<K, decltype(ref)> k(kernel, ref, b == 0 ? 8 : 64);

@@ -45,21 +45,11 @@ std::vector<PathMutationInfo>& table() {
 
 const std::vector<PathMutationInfo>& path_mutations() { return table(); }
 
-const PathMutationInfo* find_path_mutation(const std::string& name) {
-  for (const auto& m : table())
-    if (m.name == name) return &m;
-  return nullptr;
-}
+const PathMutationInfo* find_path_mutation(const std::string& name) { return mcmc::find_named(table(), name); }
 
-void register_path_mutation(PathMutationInfo info) {
-  if (find_path_mutation(info.name)) throw std::invalid_argument("path mutation registered twice: " + info.name);
-  table().push_back(std::move(info));
-}
+void register_path_mutation(PathMutationInfo info) { mcmc::add_named(table(), std::move(info), "path mutation"); }
 
-void unregister_path_mutation(const std::string& name) {
-  auto& t = table();
-  t.erase(std::remove_if(t.begin(), t.end(), [&](const PathMutationInfo& m) { return m.name == name; }), t.end());
-}
+void unregister_path_mutation(const std::string& name) { mcmc::remove_named(table(), name); }
 
 PathMutationList make_path_mutations(const PathContext& ctx, const PathMutationSettings& s) {
   PathMutationList out;

@@ -1,5 +1,7 @@
 #include "lib/mcmc/pss/pss_steps.h"
 
+#include "estimators/mcmc/mutation.h"
+
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
@@ -99,21 +101,11 @@ std::vector<PssMutationInfo>& table() {
 
 const std::vector<PssMutationInfo>& pss_mutations() { return table(); }
 
-const PssMutationInfo* find_pss_mutation(const std::string& name) {
-  for (const auto& m : table())
-    if (m.name == name) return &m;
-  return nullptr;
-}
+const PssMutationInfo* find_pss_mutation(const std::string& name) { return mcmc::find_named(table(), name); }
 
-void register_pss_mutation(PssMutationInfo info) {
-  if (find_pss_mutation(info.name)) throw std::invalid_argument("PSS mutation registered twice: " + info.name);
-  table().push_back(std::move(info));
-}
+void register_pss_mutation(PssMutationInfo info) { mcmc::add_named(table(), std::move(info), "PSS mutation"); }
 
-void unregister_pss_mutation(const std::string& name) {
-  auto& t = table();
-  t.erase(std::remove_if(t.begin(), t.end(), [&](const PssMutationInfo& m) { return m.name == name; }), t.end());
-}
+void unregister_pss_mutation(const std::string& name) { mcmc::remove_named(table(), name); }
 
 PssMutationList make_pss_mutations(const std::vector<std::string>& names, const PssStepSettings& s) {
   PssMutationList out;
