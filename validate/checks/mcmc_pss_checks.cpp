@@ -11,7 +11,7 @@
 //    of the current state (PSSMLT), and MMLT without the technique count k + 1.
 //  - the lazily updated small step against its stated density (chi-square), with a misstated-
 //    density negative control;
-//  - the rescaled small step (rescaled_step.h, Szirmay-Kalos & Szecsi 2017): pairwise detailed
+//  - the rescaled small step (pss_steps.h, Szirmay-Kalos & Szecsi 2017): pairwise detailed
 //    balance on the PSSMLT (BDPT) and the path-tracer targets to 1e-9, negative control: its
 //    acceptance without T(y -> x) / T(x -> y) must violate it;
 //  - image unbiasedness of multi-stage MLT (msmlt.h, Hoberock & Hart 2010) and of the rescaled

@@ -86,7 +86,7 @@ struct PssSettings {
   // real one, validate/render/broken_pss.h).
   std::function<SampleFunction(const SampleFunction&)> wrap_sample;
   bool print_stats = false;             // acceptance rates and mutations/s to stderr
-  // Small-step sigma rescaled by the current target value (rescaled_step.h), Y_ref = b of the pass.
+  // Small-step sigma rescaled by the current target value ("rescaled small step", pss_steps.h), Y_ref = b of the pass.
   StepRescaling rescale;
   // The settings of the registered mutations, and the list they make (mutations, when set).
   PssStepSettings step_settings() const;
@@ -164,7 +164,7 @@ int64_t render_pssmlt(const World& world, const RenderSettings& settings, const 
                       pss::PssStats* stats);
 int64_t render_mmlt(const World& world, const RenderSettings& settings, const pss::PssSettings& pss, Film& film,
                     pss::PssStats* stats);
-// PSSMLT over the path tracer with the small step rescaled by the path's luminance (rescaled_step.h).
+// PSSMLT over the path tracer with the small step rescaled by the path's luminance ("rescaled small step", pss_steps.h).
 int64_t render_pssmlt_pt_rescaled(const World& world, const RenderSettings& settings, Film& film);
 
 }  // namespace tb

@@ -34,7 +34,7 @@
 // coordinates it read before, so this is a proper proposal with density
 //   T(x -> y) = prod_{i in D(x) ∩ D(y)} g_{sigma(x)}(y_i - x_i) * prod_{i not in it} g_sigma(y_i - x_i)
 // and T(y -> x) / T(x -> y) = prod_{i in D(x) ∩ D(y)} g_{sigma(y)}(x_i - y_i) / g_{sigma(x)}(y_i - x_i)
-// (the fixed-sigma factors, over infinitely many coordinates, cancel pairwise): log_small_step_ratio.
+// (the fixed-sigma factors, over infinitely many coordinates, cancel pairwise): RescaledSmallStep::log_reverse_over_forward (pss_steps.h).
 // D(x) is a prefix of each stream (commit_reads / accept record how far x read each stream).
 #pragma once
 
