@@ -447,8 +447,7 @@ int64_t render_pssmlt(const World& world, const RenderSettings& settings, const 
                       pss::PssStats* stats) {
   const LightSampler sampler(world);
   const PathContext ctx{&world, &sampler};
-  const pss::SampleFunction f = pss::bdpt_sample_function(ctx, film.width(), film.height(), settings.max_depth,
-                                                          settings.fault);
+  const pss::SampleFunction f = pss::bdpt_sample_function(ctx, film.width(), film.height(), settings.max_depth);
   return pss::run_pss(f, settings, p, film, stats);
 }
 
