@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -21,7 +22,10 @@ namespace tb {
 
 int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   if (a.list) {
-    for (const auto& i : integrators()) fmt::print("{:<12} {}\n", i.name, i.description);
+    for (const auto& i : integrators()) {
+      fmt::print("{:<12} {}\n", i.name, i.description);
+      for (const auto& p : i.parameters) fmt::print("{:<12}   --param {}=...  {}\n", "", p.name, p.description);
+    }
     return 0;
   }
   const IntegratorInfo* integ = find_integrator(a.integrator);
@@ -29,6 +33,30 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     std::string names;
     for (const auto& i : integrators()) names += (names.empty() ? "" : ", ") + i.name;
     fmt::print(stderr, "tb render: unknown integrator '{}' (known: {})\n", a.integrator, names);
+    return 2;
+  }
+  std::map<std::string, double> params;
+  for (const std::string& kv : a.params) {
+    const size_t eq = kv.find('=');
+    double v = 0.0;
+    size_t used = 0;
+    bool ok = eq != std::string::npos && eq > 0;
+    if (ok) {
+      try {
+        v = std::stod(kv.substr(eq + 1), &used);
+      } catch (const std::exception&) {
+        ok = false;
+      }
+      ok = ok && used == kv.size() - eq - 1;
+    }
+    if (!ok) {
+      fmt::print(stderr, "tb render: --param '{}' is not NAME=NUMBER\n", kv);
+      return 2;
+    }
+    params[kv.substr(0, eq)] = v;
+  }
+  if (const std::string err = validate_params(*integ, params); !err.empty()) {
+    fmt::print(stderr, "tb render: {}\n", err);
     return 2;
   }
   const auto t_load = std::chrono::steady_clock::now();
@@ -42,6 +70,7 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   st.passes = std::min(a.passes, st.spp);
   st.time_budget_s = a.time_s;
   st.interrupted = interrupted;
+  st.params = params;
   RunReport report;
   st.report = &report;
   if (a.time_s > 0) {  // open-ended passes of default_pass_spp each, until the budget runs out
@@ -77,6 +106,7 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
                         {"seed", a.seed},
                         {"passes", passes},
                         {"max_depth", st.max_depth},
+                        {"params", params},
                         {"resolution", {film.width(), film.height()}},
                         {"spp", spp_done},
                         {"seconds", seconds},

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace tb {
 
@@ -20,6 +21,7 @@ struct RenderArgs {
   std::string resolution;   // "WxH": overrides the camera resolution of the scene file
   bool no_progress = false;
   bool list = false;
+  std::vector<std::string> params;  // NAME=VALUE, integrator parameters
 };
 
 int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted);

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,10 @@ struct RenderSettings {
   // used by the per-technique checks. -1: all.
   int only_length = -1;
   int only_s = -1;           // with only_s >= 0 the single technique is unweighted (weight 1)
+  // Integrator parameters by name (`tb render --param NAME=VALUE`); each integrator lists the
+  // names it takes (IntegratorInfo::parameters) and ignores nothing: the program rejects a name
+  // the integrator does not list. Empty: the integrator's defaults.
+  std::map<std::string, double> params;
   std::function<void(double)> progress = [](double) {};
   const std::atomic<bool>* interrupted = nullptr;  // stop between passes
   RunReport* report = nullptr;  // filled by MCMC integrators when set
