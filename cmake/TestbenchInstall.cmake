@@ -30,8 +30,7 @@ foreach(layer IN LISTS TB_EXPORTED_LAYERS)
 endforeach()
 
 install(TARGETS ${TB_EXPORTED_LAYERS} EXPORT testbenchTargets
-        ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT development
-        INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+        ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT development)
 # The headers of every exported layer, with their folder structure.
 install(DIRECTORY lib estimators analytic validate
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} COMPONENT development
