@@ -4,9 +4,11 @@
 # 1. cmake --install BUILD_DIR --prefix WORK/prefix (exactly the documented command);
 # 2. a project asking for find_package(testbench 1.0) must NOT find 0.x (the version file works),
 #    and one asking for the installed major.minor must;
-# 3. configures examples/own-sampler against WORK/prefix only (no package registry, no build
+# 3. a project with one program per lower target (testbench::core, ::estimators, ::analytic,
+#    ::render), each linking only that target, builds and runs (each target stands alone);
+# 4. configures examples/own-sampler against WORK/prefix only (no package registry, no build
 #    tree), requires testbench_DIR to be the installed one and no include path into the sources;
-# 4. builds it with -Werror and runs it: it exits non-zero when an assertion or a negative
+# 5. builds it with -Werror and runs it: it exits non-zero when an assertion or a negative
 #    control misbehaves.
 cmake_minimum_required(VERSION 3.20)
 foreach(v BUILD_DIR SOURCE_DIR WORK GENERATOR CXX_COMPILER)
@@ -59,6 +61,71 @@ foreach(request IN ITEMS 1.0 ${installed_mm})
     message(FATAL_ERROR "install_example: find_package(testbench ${request}) failed on the installed package")
   endif()
   message("find_package(testbench ${request}): result ${rc} (as expected)")
+endforeach()
+
+# One program per lower target; each exits non-zero if its check fails.
+set(dir "${WORK}/targets")
+file(MAKE_DIRECTORY "${dir}")
+file(WRITE "${dir}/core.cpp" [=[
+#include <vector>
+#include "lib/core/discrete.h"
+#include "lib/core/strict_json.h"
+int main() {
+  const std::vector<double> w{1.0, 3.0};
+  const auto t = tb::AliasTable::create(w);
+  return t && t->pmf(1) == 0.75 && tb::edit_distance("kitten", "sitting") == 3 ? 0 : 1;
+}
+]=])
+file(WRITE "${dir}/estimators.cpp" [=[
+#include <optional>
+#include "estimators/mc.h"
+struct Unit {  // uniform on [0, 1]
+  using Sample = double;
+  std::optional<double> sample(tb::Uniforms& u) const { return u.next(); }
+  double pdf(double) const { return 1.0; }
+};
+int main() {
+  tb::FixedUniforms u{0.25, 0.75};
+  return tb::estimate_mc([](double x) { return x; }, Unit{}, 2, u).value == 0.5 ? 0 : 1;
+}
+]=])
+file(WRITE "${dir}/analytic.cpp" [=[
+#include <cmath>
+#include "analytic/integrands.h"
+int main() {
+  if (tb::integrands_1d().empty()) return 1;
+  for (const auto& f : tb::integrands_1d())
+    if (!std::isfinite(f.integral)) return 1;
+  return 0;
+}
+]=])
+file(WRITE "${dir}/render.cpp" [=[
+#include <exception>
+#include "lib/scene/scene_loader.h"
+int main() {
+  try {
+    tb::load_world_from_string("{", "truncated");
+  } catch (const std::exception&) {
+    return 0;  // a parse error, reported by the scene loader
+  }
+  return 1;
+}
+]=])
+file(WRITE "${dir}/CMakeLists.txt" [=[
+cmake_minimum_required(VERSION 3.20)
+project(targets LANGUAGES CXX)
+find_package(testbench REQUIRED)
+foreach(t core estimators analytic render)
+  add_executable(${t}_only ${t}.cpp)
+  target_link_libraries(${t}_only PRIVATE testbench::${t})
+  target_compile_options(${t}_only PRIVATE -Wall -Wextra -Werror)
+endforeach()
+]=])
+run("configuring the per-target programs" ${CMAKE_COMMAND} -S "${dir}" -B "${dir}/build" ${common})
+run("building the per-target programs" ${CMAKE_COMMAND} --build "${dir}/build" -j 2)
+foreach(t core estimators analytic render)
+  run("running ${t}_only" "${dir}/build/${t}_only")
+  message("testbench::${t} alone: ok")
 endforeach()
 
 set(example "${WORK}/own-sampler")
