@@ -1,0 +1,171 @@
+#include "validate/differential/hslt_paths.h"
+
+#include <cmath>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+
+#include "lib/core/hash.h"
+#include "lib/core/rng.h"
+#include "lib/geometry/spawn.h"
+#include "lib/material/bsdf.h"
+#include "validate/render/render_compare.h"
+
+namespace tb {
+namespace {
+
+constexpr int kResolution = 64;
+
+bool frame_ok(const HsltVertex& v) {
+  return v.area_element() > 1e-4 && glm::length(v.dpdu) > 1e-3 && std::abs(glm::dot(v.n, v.frame_ref)) < 0.99;
+}
+
+}  // namespace
+
+std::optional<HsltPath> trace_hslt_specular_path(const World& world, uint64_t seed, uint64_t key, int64_t index,
+                                                 int max_segments) {
+  Rng rng = Rng::for_sample(seed, key, static_cast<uint64_t>(index));
+  const Vec2 raster(kResolution * rng.uniform(), kResolution * rng.uniform());
+  const CameraRay cr = world.camera().generate_ray(raster, Vec2(0.5));
+  HsltPath path;
+  path.vertices.push_back(make_point_vertex(cr.ray.o));
+  Ray ray{cr.ray.o, cr.ray.d};
+  double eta_here = 1.0;  // index of the medium the ray travels in (the camera is in air)
+  for (int depth = 1; depth <= max_segments; ++depth) {
+    const std::optional<Hit> hit = world.geometry().intersect(ray);
+    if (!hit) return std::nullopt;
+    const Bsdf* bsdf = world.surface(hit->shape_id).bsdf;
+    if (bsdf == nullptr) return std::nullopt;  // an emitter
+    if (!(bsdf->flags() & bsdf_flags::kDelta)) {
+      if (depth < 2) return std::nullopt;  // no specular vertex
+      path.vertices.push_back(make_hslt_vertex(*hit, eta_here, eta_here));
+      return path;
+    }
+    const Vec3 wo = -ray.d;
+    const bool front = glm::dot(wo, hit->n) > 0;
+    const Vec3 n = front ? hit->n : -hit->n;  // shading normal on the side of wo
+    Vec3 wi = reflect(wo, n);
+    double eta_next = eta_here;
+    if (bsdf->flags() & bsdf_flags::kTransmission) {
+      const double eta_other = front ? bsdf->eta() : 1.0;  // outward normals: front = outside
+      const std::optional<Vec3> t = refract(wo, n, eta_other / eta_here);
+      if (t && rng.uniform() < 0.5) {
+        wi = *t;
+        eta_next = eta_other;
+      }
+    }
+    HsltVertex v = make_hslt_vertex(*hit, eta_here, eta_next);
+    if (!frame_ok(v)) return std::nullopt;
+    path.vertices.push_back(v);
+    ray = spawn_ray(*hit, wi);
+    eta_here = eta_next;
+  }
+  return std::nullopt;
+}
+
+std::optional<HsltPath> sample_hslt_connected_path(const World& world, HsltVertexMix mix, int segments, uint64_t seed,
+                                                   uint64_t key, int64_t index) {
+  std::vector<uint32_t> shapes;
+  for (uint32_t s = 0; s < world.surface_count(); ++s)
+    if (world.surface(s).bsdf != nullptr) shapes.push_back(s);
+  Rng rng = Rng::for_sample(seed, key, static_cast<uint64_t>(index));
+  HsltPath path;
+  uint32_t last = ~0u;
+  for (int j = 0; j <= segments; ++j) {
+    uint32_t s = last;
+    while (s == last) s = shapes[std::min(shapes.size() - 1, static_cast<size_t>(rng.uniform() * static_cast<double>(shapes.size())))];
+    last = s;
+    // Area sampling, kept away from the parameter-domain boundary (poles, seams).
+    const Vec2 u(0.05 + 0.9 * rng.uniform(), 0.05 + 0.9 * rng.uniform());
+    const Hit h = world.geometry().sample_area(s, u).hit;
+    double eta_prev = 1.0, eta_next = 1.0;
+    const bool refraction =
+        mix == HsltVertexMix::kRefraction || (mix == HsltVertexMix::kMixed && rng.uniform() < 0.5);
+    const double eta = rng.uniform() < 0.5 ? 1.5 : 1.33;
+    if (refraction) {
+      (rng.uniform() < 0.5 ? eta_prev : eta_next) = eta;
+    } else if (rng.uniform() < 0.5) {
+      eta_prev = eta_next = eta;  // a reflection inside a dense medium
+    }
+    HsltVertex v = make_hslt_vertex(h, eta_prev, eta_next);
+    if (!frame_ok(v)) return std::nullopt;
+    path.vertices.push_back(v);
+  }
+  for (int j = 0; j < segments; ++j)
+    if (glm::length(path.vertices[static_cast<size_t>(j)].p - path.vertices[static_cast<size_t>(j + 1)].p) < 0.05)
+      return std::nullopt;
+  for (int i = 1; i < segments; ++i)
+    if (hslt_half_vector(path, i).H_len < 0.05) return std::nullopt;
+  return path;
+}
+
+std::vector<int> hslt_free_vertices(const HsltPath& path) {
+  std::vector<int> free;
+  for (int j = 0; j < static_cast<int>(path.vertices.size()); ++j)
+    if (path.vertices[static_cast<size_t>(j)].on_surface) free.push_back(j);
+  return free;
+}
+
+Eigen::VectorXd hslt_free_coordinates(const HsltPath& path, const std::vector<int>& free) {
+  Eigen::VectorXd x(2 * static_cast<Eigen::Index>(free.size()));
+  for (size_t j = 0; j < free.size(); ++j) {
+    const Vec2 uv = path.vertices[static_cast<size_t>(free[j])].uv;
+    x[static_cast<Eigen::Index>(2 * j)] = uv.x;
+    x[static_cast<Eigen::Index>(2 * j + 1)] = uv.y;
+  }
+  return x;
+}
+
+HsltPath hslt_path_at(const Scene& scene, const HsltPath& path, const std::vector<int>& free, const Eigen::VectorXd& uv) {
+  return hslt_path_at(path, free, uv, [&](const HsltVertex& v, const Vec2& c) {
+    return scene.surface_at(v.shape_id, v.prim_id, c);
+  });
+}
+
+Eigen::MatrixXd hslt_free_columns(const Eigen::MatrixXd& full, const std::vector<int>& free) {
+  Eigen::MatrixXd J(full.rows(), 2 * static_cast<Eigen::Index>(free.size()));
+  for (size_t j = 0; j < free.size(); ++j) J.middleCols<2>(static_cast<Eigen::Index>(2 * j)) = full.middleCols<2>(2 * free[j]);
+  return J;
+}
+
+const std::vector<std::string>& hslt_families() {
+  static const std::vector<std::string> f{"curved_mirrors", "glass", "mirror_chain", "reflection", "refraction", "mixed"};
+  return f;
+}
+
+const World& hslt_family_world(const std::string& family) {
+  static std::mutex mutex;
+  static std::map<std::string, std::unique_ptr<World>> worlds;
+  std::string file;
+  if (family == "curved_mirrors" || family == "reflection" || family == "mixed") file = "dg-curved-mirrors.json";
+  else if (family == "glass" || family == "refraction") file = "dg-glass.json";
+  else if (family == "mirror_chain") file = "dg-mirror-chain.json";
+  else throw std::invalid_argument("unknown HSLT path family " + family);
+  std::lock_guard<std::mutex> lock(mutex);
+  auto& w = worlds[file];
+  if (!w) w = load_scene_at_resolution(file, kResolution, kResolution);
+  return *w;
+}
+
+HsltPathSet hslt_path_set(const std::string& family, int count, uint64_t seed) {
+  HsltPathSet set;
+  set.name = family;
+  const World& world = hslt_family_world(family);
+  const uint64_t key = hash_string("differential.hslt.paths." + family);
+  const bool traced = family == "curved_mirrors" || family == "glass" || family == "mirror_chain";
+  const HsltVertexMix mix = family == "reflection"   ? HsltVertexMix::kReflection
+                            : family == "refraction" ? HsltVertexMix::kRefraction
+                                                     : HsltVertexMix::kMixed;
+  const int64_t max_attempts = 2000 * static_cast<int64_t>(count);
+  for (int64_t a = 0; a < max_attempts && static_cast<int>(set.paths.size()) < count; ++a) {
+    ++set.attempts;
+    const int segments = 2 + static_cast<int>(set.paths.size()) % 7;  // k = 2 .. 8 in turn
+    std::optional<HsltPath> p = traced ? trace_hslt_specular_path(world, seed, key, a)
+                                       : sample_hslt_connected_path(world, mix, segments, seed, key, a);
+    if (p) set.paths.push_back(std::move(*p));
+  }
+  return set;
+}
+
+}  // namespace tb

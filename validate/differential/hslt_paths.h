@@ -1,0 +1,60 @@
+// Light paths for the half-vector constraint checks (lib/differential/hslt_*.h), built two ways:
+//  * traced: from the pinhole camera of a scene through a pixel, continued through every delta
+//    (specular) surface by reflection or refraction, ending at the first non-delta surface. The
+//    interior vertices are then specular (h^perp = 0, Kaplanyan 2014 Sec. 4.4); x_0 is the
+//    camera point (fixed), x_k the diffuse surface point (free);
+//  * sampled: k + 1 points sampled uniformly by area on the non-emitting shapes of a scene
+//    (consecutive points on different shapes) and connected, visibility ignored (the constraints
+//    are purely geometric). Interior vertices are reflections, refractions or a mix with random
+//    indices of refraction; h^perp is then generic (a glossy vertex).
+// Plus the finite-difference view of H^perp: a function of the (u, v) of the free vertices.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "lib/differential/hslt_constraints.h"
+#include "lib/scene/world.h"
+
+namespace tb {
+
+// A specular chain traced from the camera; nullopt when the pixel sees no delta surface first,
+// the chain escapes or hits an emitter, or it has more than max_segments segments.
+// Refractions are chosen with probability 1/2 at a dielectric (reflection on TIR).
+std::optional<HsltPath> trace_hslt_specular_path(const World& world, uint64_t seed, uint64_t key, int64_t index,
+                                                 int max_segments = 8);
+
+enum class HsltVertexMix { kReflection, kRefraction, kMixed };
+
+// k = segments; nullopt on a degenerate draw (points closer than 0.05, |H| < 0.05, a degenerate
+// tangent frame).
+std::optional<HsltPath> sample_hslt_connected_path(const World& world, HsltVertexMix mix, int segments, uint64_t seed,
+                                                   uint64_t key, int64_t index);
+
+// The vertices whose (u, v) are variables: interior vertices and endpoints on a surface.
+std::vector<int> hslt_free_vertices(const HsltPath& path);
+// (u, v) of the free vertices, concatenated.
+Eigen::VectorXd hslt_free_coordinates(const HsltPath& path, const std::vector<int>& free);
+// The path with the free vertices moved to the given (u, v) (Scene::surface_at).
+HsltPath hslt_path_at(const Scene& scene, const HsltPath& path, const std::vector<int>& free, const Eigen::VectorXd& uv);
+// Columns of a full Jacobian (hslt_full_jacobian, 2 per vertex) of the free vertices.
+Eigen::MatrixXd hslt_free_columns(const Eigen::MatrixXd& full, const std::vector<int>& free);
+
+// A named set of paths the checks run on.
+struct HsltPathSet {
+  std::string name;             // e.g. "dg-glass traced", "mixed sampled"
+  std::vector<HsltPath> paths;
+  int64_t attempts = 0;         // draws made to obtain them
+};
+// Families: "curved_mirrors", "glass", "mirror_chain" (traced on scenes/dg-*.json), "reflection",
+// "refraction", "mixed" (sampled on dg-curved-mirrors / dg-glass shapes, k = 2 .. 8 in turn).
+const std::vector<std::string>& hslt_families();
+HsltPathSet hslt_path_set(const std::string& family, int count, uint64_t seed);
+// The world a family is built on (loaded once, cached).
+const World& hslt_family_world(const std::string& family);
+
+}  // namespace tb
