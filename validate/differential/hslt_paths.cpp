@@ -8,7 +8,6 @@
 
 #include "lib/core/hash.h"
 #include "lib/core/rng.h"
-#include "lib/geometry/spawn.h"
 #include "lib/material/bsdf.h"
 #include "validate/render/render_compare.h"
 
@@ -58,10 +57,26 @@ std::optional<HsltPath> trace_hslt_specular_path(const World& world, uint64_t se
     HsltVertex v = make_hslt_vertex(*hit, eta_here, eta_next);
     if (!frame_ok(v)) return std::nullopt;
     path.vertices.push_back(v);
-    ray = spawn_ray(*hit, wi);
+    // From the exact hit point with a small t_min rather than an offset origin (spawn_ray): the
+    // next vertex then lies on the line x_i + t wi, so h^perp = 0 holds to rounding; an offset of
+    // the float-triangle error bound would tilt the segment by |offset| / distance (~1e-5).
+    ray = Ray{hit->p, wi, 1e-5 * std::max(1.0, glm::length(hit->p)), kInfinity};
     eta_here = eta_next;
   }
   return std::nullopt;
+}
+
+// A physical configuration at interior vertex i, away from the fold of the constraint: a
+// reflection has both directions on one side of the surface, a refraction one on each side,
+// neither grazing, and h is not near the tangent plane (where its orientation to the side of n
+// flips).
+bool interior_vertex_ok(const HsltPath& path, int i) {
+  const HsltVertex& x = path.vertices[static_cast<size_t>(i)];
+  const HsltHalfVector hv = hslt_half_vector(path, i);
+  const double cp = glm::dot(hv.w_prev, x.ng), cn = glm::dot(hv.w_next, x.ng);
+  const bool reflection = x.eta_prev == x.eta_next;
+  if (std::abs(cp) < 0.05 || std::abs(cn) < 0.05 || (cp * cn > 0) != reflection) return false;
+  return hv.H_len >= 0.05 && std::abs(glm::dot(hv.h, x.n)) >= 0.1;
 }
 
 std::optional<HsltPath> sample_hslt_connected_path(const World& world, HsltVertexMix mix, int segments, uint64_t seed,
@@ -71,32 +86,38 @@ std::optional<HsltPath> sample_hslt_connected_path(const World& world, HsltVerte
     if (world.surface(s).bsdf != nullptr) shapes.push_back(s);
   Rng rng = Rng::for_sample(seed, key, static_cast<uint64_t>(index));
   HsltPath path;
-  uint32_t last = ~0u;
+  // Vertex by vertex; vertex j is redrawn (at most 64 times) until vertex j - 1 is valid.
   for (int j = 0; j <= segments; ++j) {
-    uint32_t s = last;
-    while (s == last) s = shapes[std::min(shapes.size() - 1, static_cast<size_t>(rng.uniform() * static_cast<double>(shapes.size())))];
-    last = s;
-    // Area sampling, kept away from the parameter-domain boundary (poles, seams).
-    const Vec2 u(0.05 + 0.9 * rng.uniform(), 0.05 + 0.9 * rng.uniform());
-    const Hit h = world.geometry().sample_area(s, u).hit;
-    double eta_prev = 1.0, eta_next = 1.0;
-    const bool refraction =
-        mix == HsltVertexMix::kRefraction || (mix == HsltVertexMix::kMixed && rng.uniform() < 0.5);
-    const double eta = rng.uniform() < 0.5 ? 1.5 : 1.33;
-    if (refraction) {
-      (rng.uniform() < 0.5 ? eta_prev : eta_next) = eta;
-    } else if (rng.uniform() < 0.5) {
-      eta_prev = eta_next = eta;  // a reflection inside a dense medium
+    bool placed = false;
+    for (int attempt = 0; attempt < 64 && !placed; ++attempt) {
+      // Consecutive vertices may lie on one shape (a chord through a closed glass object, a
+      // reflection inside a concave mirror); the side tests below keep the configuration physical.
+      const uint32_t s =
+          shapes[std::min(shapes.size() - 1, static_cast<size_t>(rng.uniform() * static_cast<double>(shapes.size())))];
+      // Area sampling, kept away from the parameter-domain boundary (poles, seams).
+      const Vec2 u(0.05 + 0.9 * rng.uniform(), 0.05 + 0.9 * rng.uniform());
+      const Hit h = world.geometry().sample_area(s, u).hit;
+      double eta_prev = 1.0, eta_next = 1.0;
+      const bool refraction =
+          mix == HsltVertexMix::kRefraction || (mix == HsltVertexMix::kMixed && rng.uniform() < 0.5);
+      const double eta = rng.uniform() < 0.5 ? 1.5 : 1.33;
+      if (refraction) {
+        (rng.uniform() < 0.5 ? eta_prev : eta_next) = eta;
+      } else if (rng.uniform() < 0.5) {
+        eta_prev = eta_next = eta;  // a reflection inside a dense medium
+      }
+      const HsltVertex v = make_hslt_vertex(h, eta_prev, eta_next);
+      if (!frame_ok(v)) continue;
+      if (j > 0 && glm::length(v.p - path.vertices.back().p) < 0.05) continue;
+      path.vertices.push_back(v);
+      if (j >= 2 && !interior_vertex_ok(path, j - 1)) {
+        path.vertices.pop_back();
+        continue;
+      }
+      placed = true;
     }
-    HsltVertex v = make_hslt_vertex(h, eta_prev, eta_next);
-    if (!frame_ok(v)) return std::nullopt;
-    path.vertices.push_back(v);
+    if (!placed) return std::nullopt;
   }
-  for (int j = 0; j < segments; ++j)
-    if (glm::length(path.vertices[static_cast<size_t>(j)].p - path.vertices[static_cast<size_t>(j + 1)].p) < 0.05)
-      return std::nullopt;
-  for (int i = 1; i < segments; ++i)
-    if (hslt_half_vector(path, i).H_len < 0.05) return std::nullopt;
   return path;
 }
 
@@ -166,6 +187,24 @@ HsltPathSet hslt_path_set(const std::string& family, int count, uint64_t seed) {
     if (p) set.paths.push_back(std::move(*p));
   }
   return set;
+}
+
+}  // namespace tb
+
+namespace tb {
+
+HsltFdChart hslt_fd_chart(const HsltPath& path, const std::vector<int>& free, double length) {
+  HsltFdChart c;
+  c.free = free;
+  c.length = length;
+  c.uv0 = hslt_free_coordinates(path, free);
+  c.scale.resize(c.uv0.size());
+  for (size_t j = 0; j < free.size(); ++j) {
+    const HsltVertex& v = path.vertices[static_cast<size_t>(free[j])];
+    c.scale[static_cast<Eigen::Index>(2 * j)] = length / glm::length(v.dpdu);
+    c.scale[static_cast<Eigen::Index>(2 * j + 1)] = length / glm::length(v.dpdv);
+  }
+  return c;
 }
 
 }  // namespace tb

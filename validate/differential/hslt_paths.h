@@ -4,7 +4,8 @@
 //    interior vertices are then specular (h^perp = 0, Kaplanyan 2014 Sec. 4.4); x_0 is the
 //    camera point (fixed), x_k the diffuse surface point (free);
 //  * sampled: k + 1 points sampled uniformly by area on the non-emitting shapes of a scene
-//    (consecutive points on different shapes) and connected, visibility ignored (the constraints
+//    and connected vertex by vertex (each redrawn until the previous interior vertex is a
+//    physical reflection / refraction away from grazing and from h in the tangent plane), visibility ignored (the constraints
 //    are purely geometric). Interior vertices are reflections, refractions or a mix with random
 //    indices of refraction; h^perp is then generic (a glossy vertex).
 // Plus the finite-difference view of H^perp: a function of the (u, v) of the free vertices.
@@ -43,6 +44,25 @@ Eigen::VectorXd hslt_free_coordinates(const HsltPath& path, const std::vector<in
 HsltPath hslt_path_at(const Scene& scene, const HsltPath& path, const std::vector<int>& free, const Eigen::VectorXd& uv);
 // Columns of a full Jacobian (hslt_full_jacobian, 2 per vertex) of the free vertices.
 Eigen::MatrixXd hslt_free_columns(const Eigen::MatrixXd& full, const std::vector<int>& free);
+
+// The coordinates the finite-difference checks differentiate in: a local chart around the path,
+// delta = 0 at the path, uv = uv0 + delta * length / (|dp/du|, |dp/dv|) per free vertex, so that
+// a unit of every coordinate moves its vertex by about `length` scene units whatever the shape's
+// (u, v) scale (a floor of half size 4 has |dp/du| = 8, a sphere of radius 0.35 has 2.2); the
+// constraint values are divided by `length` too, so that the Jacobian in the chart,
+// J_uv diag(scale) / length, is the derivative of h^perp per scene unit of displacement (entries
+// of order 1-10, where the relative error of fd_jacobian.h with its floor of 1 is relative).
+// With length = 0.01, Ceres' default first Ridders step (2^5 x 1e-2 at delta = 0) is 3.2e-3
+// scene units, the central-difference step 6e-8 and the largest Taylor step 1e-4.
+struct HsltFdChart {
+  std::vector<int> free;
+  Eigen::VectorXd uv0, scale;
+  double length = 0.01;
+  Eigen::VectorXd uv(const Eigen::VectorXd& delta) const { return uv0 + scale.cwiseProduct(delta); }
+  Eigen::VectorXd value(const Eigen::VectorXd& h_perp) const { return h_perp / length; }
+  Eigen::MatrixXd jacobian(const Eigen::MatrixXd& j_uv) const { return j_uv * scale.asDiagonal() / length; }
+};
+HsltFdChart hslt_fd_chart(const HsltPath& path, const std::vector<int>& free, double length = 0.01);
 
 // A named set of paths the checks run on.
 struct HsltPathSet {
