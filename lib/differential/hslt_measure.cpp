@@ -16,6 +16,17 @@ double hslt_geometry_term(const HsltVertex& a, const HsltVertex& b) {
   return ca * cb / l2;
 }
 
+bool hslt_transfer_matrix(const HsltBlocks& b, Eigen::Matrix2d* t1) {
+  const int n = b.size();
+  const HsltBlockLu lu(b);
+  if (n < 1 || !lu.ok()) return false;
+  // dH^perp = J dX + C_{k-1} dx_k = 0 at fixed H^perp: dX = -J^{-1} [0 .. 0; C_{k-1}] dx_k.
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(2 * n, 2);
+  rhs.bottomRows<2>() = -b.C.back();
+  *t1 = lu.solve(rhs).topRows<2>();
+  return t1->allFinite();
+}
+
 HsltMeasureTerms hslt_measure_terms(const HsltPath& path) {
   HsltMeasureTerms t;
   const int k = path.segments(), n = path.interior_count();
@@ -26,16 +37,13 @@ HsltMeasureTerms hslt_measure_terms(const HsltPath& path) {
   t.g01 = hslt_geometry_term(path.vertices[0], path.vertices[1]);
   const HsltBlocks b = hslt_constraint_blocks(path);
   const HsltBlockLu lu(b);
-  if (!lu.ok()) return t;
+  Eigen::Matrix2d t1;
+  if (!lu.ok() || !hslt_transfer_matrix(b, &t1)) return t;
   // Area measure: d(h^perp) / dA_i = d(h^perp)/d(u,v)_i / |dp/du x dp/dv|_i (Eq. 11 in area).
   t.log_abs_det_area = lu.log_abs_determinant();
   for (int i = 1; i <= n; ++i) t.log_abs_det_area -= std::log(path.vertices[static_cast<size_t>(i)].area_element());
-  // T_1 = d(u,v)_1 / d(u,v)_k = first block row of -J^{-1} [0 .. 0; C_{k-1}] (Eq. 6), then to area.
-  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(2 * n, 2);
-  rhs.bottomRows<2>() = -b.C.back();
-  const Eigen::MatrixXd Y = lu.solve(rhs);
-  t.transfer_det = std::abs(Y.topRows<2>().determinant()) * path.vertices[1].area_element() /
-                   path.vertices.back().area_element();
+  // |T_1| (Eq. 6) from (u, v) to area.
+  t.transfer_det = std::abs(t1.determinant()) * path.vertices[1].area_element() / path.vertices.back().area_element();
   for (int i = 1; i <= n; ++i) {
     const HsltVertex& x = path.vertices[static_cast<size_t>(i)];
     const HsltHalfVector hv = hslt_half_vector(path, i);

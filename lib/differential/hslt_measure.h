@@ -28,6 +28,11 @@ namespace tb {
 
 double hslt_geometry_term(const HsltVertex& a, const HsltVertex& b);
 
+// The transfer matrix of Eq. 6 in (u, v) coordinates: T_1 = d(u,v)_1 / d(u,v)_k at fixed H^perp
+// and x_0, the first block row of -J^{-1} [0 .. 0; C_{k-1}] (block LU solve, Sec. 7). Returns
+// false when the block LU meets a singular pivot.
+bool hslt_transfer_matrix(const HsltBlocks& b, Eigen::Matrix2d* t1);
+
 // The factors of both forms, for reporting and for the checks.
 struct HsltMeasureTerms {
   bool ok = false;                     // block LU succeeded and x_k lies on a surface

@@ -7,6 +7,8 @@
 //   differential.hslt.determinant            block LU (Sec. 7) vs dense Eigen LU vs the
 //                                            determinant of the finite-difference Jacobian; the
 //                                            block LU solve vs the dense solve
+//   differential.hslt.transfer_matrix        T_1 of Eq. 6 is the inverse of the FD derivative of
+//                                            the retraced specular chain's end point
 //   differential.hslt.measure                Eq. 5-6 (product of Jacobians) == Eq. 4 (direct)
 // Families (validate/differential/hslt_paths.h): curved_mirrors, glass, mirror_chain (traced from
 // the camera of scenes/dg-*.json through the specular chain), reflection, refraction, mixed
@@ -17,6 +19,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -395,6 +398,74 @@ CheckResult run_measure(const CheckContext& ctx, bool broken) {
   return r;
 }
 
+// --- transfer matrix (Eq. 6) against retracing ------------------------------------------------------
+
+constexpr double kTransferTolerance = 1e-5;  // max |M_fd T_1 - I|, M_fd = d(u,v)_k / d(u,v)_1 by FD
+
+CheckResult run_transfer(const CheckContext& ctx, const BlocksFn& blocks_fn, bool broken) {
+  double worst = 0, worst_det = 0;
+  int64_t checked = 0, skipped = 0, total = 0, failed = 0;
+  nlohmann::json per = nlohmann::json::object();
+  for (const std::string& fam : traced_families()) {
+    const World& world = hslt_family_world(fam);
+    const HsltPathSet set = hslt_path_set(fam, path_count(ctx), ctx.seed);
+    double fam_worst = 0;
+    int64_t fam_failed = 0;
+    for (const HsltPath& path : set.paths) {
+      ++total;
+      Eigen::Matrix2d t1;
+      if (!hslt_transfer_matrix(blocks_fn(path), &t1)) {
+        ++skipped;
+        continue;
+      }
+      // Central differences of the retraced end point, steps of 1e-5 and 5e-6 scene units.
+      const HsltVertex& v1 = path.vertices[1];
+      const double step[2] = {1e-5 / glm::length(v1.dpdu), 1e-5 / glm::length(v1.dpdv)};
+      Eigen::Matrix2d m[2];
+      bool ok = true;
+      for (int s = 0; s < 2 && ok; ++s) {
+        for (int c = 0; c < 2 && ok; ++c) {
+          Vec2 up = v1.uv, um = v1.uv;
+          const double h = step[c] / (1 << s);
+          up[c] += h;
+          um[c] -= h;
+          const std::optional<Vec2> a = retrace_hslt_specular_endpoint(world, path, up);
+          const std::optional<Vec2> b = retrace_hslt_specular_endpoint(world, path, um);
+          if (!a || !b) ok = false;
+          else m[s].col(c) = Eigen::Vector2d(a->x - b->x, a->y - b->y) / (up[c] - um[c]);
+        }
+      }
+      // h and h/2 disagree: an edge of the surface or of the chain's topology nearby.
+      if (!ok || (m[0] - m[1]).cwiseAbs().maxCoeff() > 1e-4 * std::max(1.0, m[1].cwiseAbs().maxCoeff())) {
+        ++skipped;
+        continue;
+      }
+      ++checked;
+      const double e = (m[1] * t1 - Eigen::Matrix2d::Identity()).cwiseAbs().maxCoeff();
+      worst_det = std::max(worst_det, std::abs(m[1].determinant() * t1.determinant() - 1.0));
+      fam_worst = std::max(fam_worst, e);
+      if (!(e < kTransferTolerance)) ++fam_failed;
+    }
+    failed += fam_failed;
+    worst = std::max(worst, fam_worst);
+    per[fam] = {{"paths", set.paths.size()}, {"worst", fam_worst}, {"failed", fam_failed}};
+  }
+  const bool ok = failed == 0 && checked > 0 && skipped * 2 < total;
+  CheckResult r;
+  r.passed = broken ? !ok : ok;
+  r.statistic_name = "max |M_fd T_1 - I|";
+  r.statistic = worst;
+  r.samples = checked;
+  r.message = fmt::format("{}{} traced paths ({} skipped): T_1 (Eq. 6, block LU) times the FD derivative of the "
+                          "retraced end point, worst |M T_1 - I| {:.3g}, |det M det T_1 - 1| {:.3g} (tolerance {:g}); "
+                          "{} failed",
+                          broken ? (ok ? "broken NOT caught: " : "broken caught: ") : "", checked, skipped, worst,
+                          worst_det, kTransferTolerance, failed);
+  r.details = {{"families", per}, {"tolerance", kTransferTolerance}, {"skipped", skipped},
+               {"worst_det_deviation", worst_det}};
+  return r;
+}
+
 // --- registration --------------------------------------------------------------------------------
 
 struct HsltChecks {
@@ -445,6 +516,18 @@ struct HsltChecks {
              .description = "Block LU determinant without the Schur complement (D_r = B_r) must be caught",
              .kind = CheckKind::kDeterministic,
              .run = [](const CheckContext& ctx) { return run_determinant(ctx, true); }});
+    reg.add({.name = "differential.hslt.transfer_matrix",
+             .description = "Transfer matrix T_1 = dx_1/dx_k at fixed H_perp (Eq. 6, block LU solve) is the inverse of "
+                            "the FD derivative of the end point of the specular chain retraced from x_0 through a "
+                            "moved x_1 (max |M T_1 - I| < 1e-5), on the traced dg-* paths",
+             .kind = CheckKind::kDeterministic,
+             .run = [](const CheckContext& ctx) { return run_transfer(ctx, hslt_constraint_blocks, false); }});
+    reg.add({.name = "differential.hslt.transfer_matrix.missing_dndu.negative_control",
+             .description = "T_1 from blocks without the shading-frame derivative must disagree with retracing",
+             .kind = CheckKind::kDeterministic,
+             .run = [](const CheckContext& ctx) {
+               return run_transfer(ctx, hslt_blocks_without_frame_derivative, true);
+             }});
     reg.add({.name = "differential.hslt.measure",
              .description = "Half-vector measure: Eq. 5-6 (G(x0,x1) |T_1| prod |do/dh| |<o,n>|/|<h,n>|, Eq. 10) "
                             "equals Eq. 4 (prod G / |det J|), rel. 1e-8",

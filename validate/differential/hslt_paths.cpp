@@ -121,6 +121,31 @@ std::optional<HsltPath> sample_hslt_connected_path(const World& world, HsltVerte
   return path;
 }
 
+std::optional<Vec2> retrace_hslt_specular_endpoint(const World& world, const HsltPath& path, const Vec2& uv1) {
+  const Scene& scene = world.geometry();
+  const int k = path.segments();
+  Vec3 prev = path.vertices[0].p;
+  const HsltVertex& v1 = path.vertices[1];
+  Hit x = scene.surface_at(v1.shape_id, v1.prim_id, uv1);
+  for (int i = 1; i < k; ++i) {
+    const HsltVertex& orig = path.vertices[static_cast<size_t>(i)];
+    const Vec3 wo = glm::normalize(prev - x.p);
+    const bool front = glm::dot(wo, x.n) > 0;
+    const Vec3 n = front ? x.n : -x.n;
+    Vec3 wi = reflect(wo, n);
+    if (orig.eta_prev != orig.eta_next) {
+      const std::optional<Vec3> t = refract(wo, n, orig.eta_next / orig.eta_prev);
+      if (!t) return std::nullopt;
+      wi = *t;
+    }
+    const std::optional<Hit> next = scene.intersect(Ray{x.p, wi, 1e-5 * std::max(1.0, glm::length(x.p)), kInfinity});
+    if (!next || next->shape_id != path.vertices[static_cast<size_t>(i + 1)].shape_id) return std::nullopt;
+    prev = x.p;
+    x = *next;
+  }
+  return x.uv;
+}
+
 std::vector<int> hslt_free_vertices(const HsltPath& path) {
   std::vector<int> free;
   for (int j = 0; j < static_cast<int>(path.vertices.size()); ++j)

@@ -36,6 +36,13 @@ enum class HsltVertexMix { kReflection, kRefraction, kMixed };
 std::optional<HsltPath> sample_hslt_connected_path(const World& world, HsltVertexMix mix, int segments, uint64_t seed,
                                                    uint64_t key, int64_t index);
 
+// For a traced specular path: x_1 moved to (u, v) on its surface, the chain retraced from the fixed
+// x_0 through x_1 by the law of reflection / Snell's law at every interior vertex (h^perp kept at
+// 0), and the (u, v) of the end point where it meets the surface of x_k. nullopt when the
+// retraced chain meets another shape than the original (or total internal reflection). This is
+// the forward map whose derivative d(u,v)_k / d(u,v)_1 is T_1^{-1} (Kaplanyan 2014, Eq. 6).
+std::optional<Vec2> retrace_hslt_specular_endpoint(const World& world, const HsltPath& path, const Vec2& uv1);
+
 // The vertices whose (u, v) are variables: interior vertices and endpoints on a surface.
 std::vector<int> hslt_free_vertices(const HsltPath& path);
 // (u, v) of the free vertices, concatenated.
