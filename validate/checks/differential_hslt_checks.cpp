@@ -43,7 +43,10 @@ using BlocksFn = std::function<HsltBlocks(const HsltPath&)>;
 constexpr double kSpecularTolerance = 1e-7;  // |h^perp| at a traced specular vertex
 constexpr double kFdTolerance = 1e-6;        // fd_jacobian.h default: central differences and Ridders
 constexpr double kLuTolerance = 1e-9;        // block LU vs dense LU: determinant and solve, relative
-constexpr double kFdDetTolerance = 1e-5;     // determinant of the FD Jacobian vs analytic, relative
+// Determinant of the FD Jacobian vs analytic, relative: the FD Jacobian has a relative error of
+// ~4e-8 (differential.hslt.jacobian.*), which the determinant amplifies by up to cond(J)
+// (|d log det| <= |J^{-1}| |dJ|), so the tolerance is 1e-6 + 1e-7 cond(J).
+constexpr double kFdDetTolerance = 1e-6, kFdDetConditionFactor = 1e-7;
 constexpr double kMeasureTolerance = 1e-8;   // Eq. 5 vs Eq. 4, relative
 constexpr double kMaxCondition = 1e6;        // determinant comparisons skip worse-conditioned J
 
@@ -142,7 +145,7 @@ JacobianStats jacobian_stats(const HsltPathSet& set, const BlocksFn& blocks_fn, 
   const Scene& scene = world.geometry();
   stats::FdOptions o;
   o.tolerance = o.ridders_tolerance = kFdTolerance;
-  o.taylor_h0 = 0.1;  // chart units: 1e-3 scene units down to 8e-6 (8 halvings)
+  o.taylor_h0 = 0.1;  // chart units: 3e-4 scene units down to 2.3e-6 (8 halvings)
   o.seed = seed;
   JacobianStats st;
   for (size_t pi = 0; pi < set.paths.size(); ++pi) {
@@ -266,11 +269,12 @@ CheckResult run_jacobian_negative(const CheckContext& ctx, const BlocksFn& broke
 
 // --- determinant and solve ---------------------------------------------------------------------------
 
-Eigen::MatrixXd central_jacobian(const stats::VectorFunction& f, const Eigen::VectorXd& x) {
+// Central differences with step scale * eps^(1/3) * max(1, |x_c|), as fd_jacobian.h.
+Eigen::MatrixXd central_jacobian(const stats::VectorFunction& f, const Eigen::VectorXd& x, double scale) {
   const Eigen::VectorXd fx = f(x);
   Eigen::MatrixXd J(fx.size(), x.size());
   for (Eigen::Index c = 0; c < x.size(); ++c) {
-    const double h0 = std::cbrt(std::numeric_limits<double>::epsilon()) * std::max(1.0, std::abs(x[c]));
+    const double h0 = scale * std::cbrt(std::numeric_limits<double>::epsilon()) * std::max(1.0, std::abs(x[c]));
     Eigen::VectorXd xp = x, xm = x;
     xp[c] += h0;
     xm[c] -= h0;
@@ -282,13 +286,13 @@ Eigen::MatrixXd central_jacobian(const stats::VectorFunction& f, const Eigen::Ve
 double rel_diff(double a, double b) { return std::abs(a - b) / std::max(std::abs(b), 1e-300); }
 
 CheckResult run_determinant(const CheckContext& ctx, bool broken) {
-  double worst_lu = 0, worst_fd = 0, worst_solve = 0, max_cond = 0;
-  int64_t checked = 0, skipped = 0, lu_failed = 0, total = 0;
+  double worst_lu = 0, worst_fd = 0, worst_fd_raw = 0, worst_solve = 0, max_cond = 0;
+  int64_t checked = 0, skipped = 0, lu_failed = 0, total = 0, fd_checked = 0, fd_skipped = 0;
   nlohmann::json per = nlohmann::json::object();
   for (const std::string& fam : hslt_families()) {
     const HsltPathSet set = hslt_path_set(fam, path_count(ctx), ctx.seed);
     const Scene& scene = hslt_family_world(fam).geometry();
-    double fam_lu = 0, fam_fd = 0;
+    double fam_lu = 0, fam_fd = 0, fam_fd_raw = 0;
     for (size_t pi = 0; pi < set.paths.size(); ++pi) {
       const HsltPath& path = set.paths[pi];
       ++total;
@@ -307,22 +311,36 @@ CheckResult run_determinant(const CheckContext& ctx, bool broken) {
         continue;
       }
       ++checked;
+      bool continue_fd = true;
       const Eigen::PartialPivLU<Eigen::MatrixXd> dense(J);
       const double det_dense = dense.determinant();
       const double det_lu = broken ? hslt_determinant_without_schur(b) : lu.determinant();
-      // Interior vertices only: the square J of Eq. 11.
+      // Interior vertices only: the square J of Eq. 11, differentiated in the chart of hslt_paths.h
+      // (det_chart = det_uv prod(scale) / length^(2n)), at steps h and h/2 (disagreement: skip).
       std::vector<int> interior;
       for (int i = 1; i <= path.interior_count(); ++i) interior.push_back(i);
-      const Eigen::MatrixXd Jfd = central_jacobian(
-          [&](const Eigen::VectorXd& x) { return hslt_constraints(hslt_path_at(scene, path, interior, x)); },
-          hslt_free_coordinates(path, interior));
-      const double det_fd = Jfd.determinant();
+      const HsltFdChart chart = hslt_fd_chart(path, interior);
+      const stats::VectorFunction fc = [&](const Eigen::VectorXd& x) {
+        return chart.value(hslt_constraints(hslt_path_at(scene, path, interior, chart.uv(x))));
+      };
+      const Eigen::VectorXd zero = Eigen::VectorXd::Zero(chart.uv0.size());
+      const Eigen::MatrixXd Jfd = central_jacobian(fc, zero, 1.0), Jfd2 = central_jacobian(fc, zero, 0.5);
+      if (continue_fd && (Jfd - Jfd2).cwiseAbs().maxCoeff() > 1e-4 * std::max(1.0, Jfd2.cwiseAbs().maxCoeff())) {
+        ++fd_skipped;
+        continue_fd = false;
+      }
+      double to_chart = 1.0;
+      for (Eigen::Index c = 0; c < chart.scale.size(); ++c) to_chart *= chart.scale[c] / chart.length;
+      const double det_fd = Jfd2.determinant() / to_chart;
+      if (continue_fd) ++fd_checked;
       Rng rng = Rng::for_sample(ctx.seed, hash_string("differential.hslt.determinant." + fam), pi);
       Eigen::VectorXd rhs(J.rows());
       for (Eigen::Index i = 0; i < rhs.size(); ++i) rhs[i] = 2 * rng.uniform() - 1;
       const Eigen::VectorXd x_lu = lu.solve(rhs), x_dense = dense.solve(rhs);
       const double e_lu = std::max(rel_diff(det_lu, det_dense), rel_diff(std::exp(lu.log_abs_determinant()), std::abs(det_dense)));
-      const double e_fd = rel_diff(det_lu, det_fd);
+      const double e_fd_raw = continue_fd ? rel_diff(det_lu, det_fd) : 0.0;
+      const double e_fd = e_fd_raw / (kFdDetTolerance + kFdDetConditionFactor * cond);  // <= 1: pass
+      fam_fd_raw = std::max(fam_fd_raw, e_fd_raw);
       const double e_solve = (x_lu - x_dense).norm() / x_dense.norm();
       fam_lu = std::max(fam_lu, e_lu);
       fam_fd = std::max(fam_fd, e_fd);
@@ -330,23 +348,27 @@ CheckResult run_determinant(const CheckContext& ctx, bool broken) {
     }
     worst_lu = std::max(worst_lu, fam_lu);
     worst_fd = std::max(worst_fd, fam_fd);
+    worst_fd_raw = std::max(worst_fd_raw, fam_fd_raw);
     per[fam] = {{"paths", set.paths.size()}, {"lengths", length_histogram(set)}, {"worst_lu_vs_dense", fam_lu},
-                {"worst_vs_fd", fam_fd}};
+                {"worst_vs_fd", fam_fd_raw}, {"worst_vs_fd_over_tolerance", fam_fd}};
   }
-  const bool ok = worst_lu < kLuTolerance && worst_fd < kFdDetTolerance && worst_solve < kLuTolerance &&
-                  lu_failed == 0 && checked > 0 && skipped * 2 < total;
+  const bool ok = worst_lu < kLuTolerance && worst_fd < 1.0 && worst_solve < kLuTolerance &&
+                  lu_failed == 0 && checked > 0 && skipped * 2 < total && fd_checked * 2 > checked;
   CheckResult r;
   r.passed = broken ? !ok : ok;
   r.statistic_name = "max rel. error";
-  r.statistic = std::max(worst_lu, worst_fd);
+  r.statistic = std::max(worst_lu, worst_fd_raw);
   r.samples = checked;
   r.message = fmt::format(
-      "{}{} paths ({} skipped with cond > {:g}, {} singular pivots): |det| block LU vs dense {:.3g} (tol {:g}), "
-      "vs FD Jacobian {:.3g} (tol {:g}), solve {:.3g} (tol {:g}); max cond {:.3g}",
+      "{}{} paths ({} skipped with cond > {:g}; {} singular pivots): |det| block LU vs dense {:.3g} (tol {:g}), "
+      "solve {:.3g} (tol {:g}); vs FD Jacobian worst {:.3g}, worst error / (1e-6 + 1e-7 cond) {:.3g} (must be < 1) "
+      "on {} paths ({} with FD step disagreement not compared); max cond {:.3g}",
       broken ? (ok ? "broken LU NOT caught: " : "broken LU caught: ") : "", checked, skipped, kMaxCondition, lu_failed,
-      worst_lu, kLuTolerance, worst_fd, kFdDetTolerance, worst_solve, kLuTolerance, max_cond);
-  r.details = {{"families", per},          {"worst_lu_vs_dense", worst_lu}, {"worst_vs_fd", worst_fd},
+      worst_lu, kLuTolerance, worst_solve, kLuTolerance, worst_fd_raw, worst_fd, fd_checked, fd_skipped, max_cond);
+  r.details = {{"families", per},          {"worst_lu_vs_dense", worst_lu}, {"worst_vs_fd", worst_fd_raw},
+               {"worst_vs_fd_over_tolerance", worst_fd},
                {"worst_solve", worst_solve}, {"skipped", skipped},          {"singular_pivots", lu_failed},
+               {"fd_compared", fd_checked}, {"fd_not_compared", fd_skipped},
                {"max_condition_number", max_cond}};
   return r;
 }
@@ -418,7 +440,7 @@ CheckResult run_transfer(const CheckContext& ctx, const BlocksFn& blocks_fn, boo
         ++skipped;
         continue;
       }
-      // Central differences of the retraced end point, steps of 1e-5 and 5e-6 scene units.
+      // Central differences of the retraced end point, steps of 1e-5 and 5e-6 scene units at x_1.
       const HsltVertex& v1 = path.vertices[1];
       const double step[2] = {1e-5 / glm::length(v1.dpdu), 1e-5 / glm::length(v1.dpdv)};
       Eigen::Matrix2d m[2];
@@ -436,13 +458,15 @@ CheckResult run_transfer(const CheckContext& ctx, const BlocksFn& blocks_fn, boo
         }
       }
       // h and h/2 disagree: an edge of the surface or of the chain's topology nearby.
-      if (!ok || (m[0] - m[1]).cwiseAbs().maxCoeff() > 1e-4 * std::max(1.0, m[1].cwiseAbs().maxCoeff())) {
+      if (!ok || (m[0] - m[1]).cwiseAbs().maxCoeff() > 1e-3 * std::max(1.0, m[1].cwiseAbs().maxCoeff())) {
         ++skipped;
         continue;
       }
       ++checked;
-      const double e = (m[1] * t1 - Eigen::Matrix2d::Identity()).cwiseAbs().maxCoeff();
-      worst_det = std::max(worst_det, std::abs(m[1].determinant() * t1.determinant() - 1.0));
+      // One Richardson step removes the O(h^2) truncation of the central differences.
+      const Eigen::Matrix2d mr = (4.0 * m[1] - m[0]) / 3.0;
+      const double e = (mr * t1 - Eigen::Matrix2d::Identity()).cwiseAbs().maxCoeff();
+      worst_det = std::max(worst_det, std::abs(mr.determinant() * t1.determinant() - 1.0));
       fam_worst = std::max(fam_worst, e);
       if (!(e < kTransferTolerance)) ++fam_failed;
     }

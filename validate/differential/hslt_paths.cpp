@@ -38,6 +38,7 @@ std::optional<HsltPath> trace_hslt_specular_path(const World& world, uint64_t se
     if (bsdf == nullptr) return std::nullopt;  // an emitter
     if (!(bsdf->flags() & bsdf_flags::kDelta)) {
       if (depth < 2) return std::nullopt;  // no specular vertex
+      if (glm::length(hit->p - path.vertices.back().p) < 0.01) return std::nullopt;
       path.vertices.push_back(make_hslt_vertex(*hit, eta_here, eta_here));
       return path;
     }
@@ -55,7 +56,9 @@ std::optional<HsltPath> trace_hslt_specular_path(const World& world, uint64_t se
       }
     }
     HsltVertex v = make_hslt_vertex(*hit, eta_here, eta_next);
-    if (!frame_ok(v)) return std::nullopt;
+    // Segments shorter than 0.01 (grazing bounces in a corner of the slab) make J entries ~1/length
+    // and its finite differences ill-posed at any fixed step; such paths are not built.
+    if (!frame_ok(v) || glm::length(v.p - path.vertices.back().p) < 0.01) return std::nullopt;
     path.vertices.push_back(v);
     // From the exact hit point with a small t_min rather than an offset origin (spawn_ray): the
     // next vertex then lies on the line x_i + t wi, so h^perp = 0 holds to rounding; an offset of

@@ -59,17 +59,19 @@ Eigen::MatrixXd hslt_free_columns(const Eigen::MatrixXd& full, const std::vector
 // constraint values are divided by `length` too, so that the Jacobian in the chart,
 // J_uv diag(scale) / length, is the derivative of h^perp per scene unit of displacement (entries
 // of order 1-10, where the relative error of fd_jacobian.h with its floor of 1 is relative).
-// With length = 0.01, Ceres' default first Ridders step (2^5 x 1e-2 at delta = 0) is 3.2e-3
-// scene units, the central-difference step 6e-8 and the largest Taylor step 1e-4.
+// With length = 0.003, Ceres' default first Ridders step (2^5 x 1e-2 at delta = 0) is 1e-3
+// scene units (at 3.2e-3 one curved-mirror path of 160 gave a Ridders error of 1e-2 from the
+// early exit of the tableau while central differences agreed to 1e-9), the central-difference
+// step 2e-8 and the largest Taylor step (taylor_h0 = 0.1) 3e-4.
 struct HsltFdChart {
   std::vector<int> free;
   Eigen::VectorXd uv0, scale;
-  double length = 0.01;
+  double length = 0.003;
   Eigen::VectorXd uv(const Eigen::VectorXd& delta) const { return uv0 + scale.cwiseProduct(delta); }
   Eigen::VectorXd value(const Eigen::VectorXd& h_perp) const { return h_perp / length; }
   Eigen::MatrixXd jacobian(const Eigen::MatrixXd& j_uv) const { return j_uv * scale.asDiagonal() / length; }
 };
-HsltFdChart hslt_fd_chart(const HsltPath& path, const std::vector<int>& free, double length = 0.01);
+HsltFdChart hslt_fd_chart(const HsltPath& path, const std::vector<int>& free, double length = 0.003);
 
 // A named set of paths the checks run on.
 struct HsltPathSet {
