@@ -20,16 +20,56 @@ bool frame_ok(const HsltVertex& v) {
   return v.area_element() > 1e-4 && glm::length(v.dpdu) > 1e-3 && std::abs(glm::dot(v.n, v.frame_ref)) < 0.99;
 }
 
+// A physical configuration at interior vertex i, away from the fold of the constraint: a
+// reflection has both directions on one side of the surface, a refraction one on each side,
+// neither grazing, and h is not near the tangent plane (where its orientation to the side of n
+// flips).
+bool interior_vertex_ok(const HsltPath& path, int i) {
+  const HsltVertex& x = path.vertices[static_cast<size_t>(i)];
+  const HsltHalfVector hv = hslt_half_vector(path, i);
+  const double cp = glm::dot(hv.w_prev, x.ng), cn = glm::dot(hv.w_next, x.ng);
+  const bool reflection = x.eta_prev == x.eta_next;
+  if (std::abs(cp) < 0.05 || std::abs(cn) < 0.05 || (cp * cn > 0) != reflection) return false;
+  return hv.H_len >= 0.05 && std::abs(glm::dot(hv.h, x.n)) >= 0.1;
+}
+
+// |cos| >= 0.05 of the segment at a surface endpoint (no grazing end segments).
+bool endpoint_ok(const HsltVertex& end, const HsltVertex& neighbour) {
+  return !end.on_surface || std::abs(glm::dot(glm::normalize(neighbour.p - end.p), end.ng)) >= 0.05;
+}
+
 }  // namespace
 
 std::optional<HsltPath> trace_hslt_specular_path(const World& world, uint64_t seed, uint64_t key, int64_t index,
                                                  int max_segments) {
   Rng rng = Rng::for_sample(seed, key, static_cast<uint64_t>(index));
-  const Vec2 raster(kResolution * rng.uniform(), kResolution * rng.uniform());
-  const CameraRay cr = world.camera().generate_ray(raster, Vec2(0.5));
   HsltPath path;
-  path.vertices.push_back(make_point_vertex(cr.ray.o));
-  Ray ray{cr.ray.o, cr.ray.d};
+  Ray ray;
+  if (index % 2 == 0) {  // from the camera through a uniform raster position
+    const Vec2 raster(kResolution * rng.uniform(), kResolution * rng.uniform());
+    const CameraRay cr = world.camera().generate_ray(raster, Vec2(0.5));
+    path.vertices.push_back(make_point_vertex(cr.ray.o));
+    ray = Ray{cr.ray.o, cr.ray.d};
+  } else {  // from a point on an area light towards a point on a delta surface
+    std::vector<uint32_t> lights, deltas;
+    for (uint32_t s = 0; s < world.surface_count(); ++s) {
+      const SurfaceInfo& info = world.surface(s);
+      if (info.emitter != nullptr) lights.push_back(s);
+      if (info.bsdf != nullptr && (info.bsdf->flags() & bsdf_flags::kDelta)) deltas.push_back(s);
+    }
+    if (lights.empty() || deltas.empty()) return std::nullopt;
+    auto pick = [&](const std::vector<uint32_t>& v) {
+      return v[std::min(v.size() - 1, static_cast<size_t>(rng.uniform() * static_cast<double>(v.size())))];
+    };
+    const uint32_t light = pick(lights);
+    const Hit l = world.geometry().sample_area(light, rng.uniform2()).hit;
+    const uint32_t target = pick(deltas);
+    const Vec3 aim = world.geometry().sample_area(target, rng.uniform2()).hit.p;
+    const HsltVertex v = make_hslt_vertex(l);
+    if (!frame_ok(v)) return std::nullopt;
+    path.vertices.push_back(v);
+    ray = Ray{l.p, glm::normalize(aim - l.p), 1e-5 * std::max(1.0, glm::length(l.p)), kInfinity};
+  }
   double eta_here = 1.0;  // index of the medium the ray travels in (the camera is in air)
   for (int depth = 1; depth <= max_segments; ++depth) {
     const std::optional<Hit> hit = world.geometry().intersect(ray);
@@ -40,6 +80,12 @@ std::optional<HsltPath> trace_hslt_specular_path(const World& world, uint64_t se
       if (depth < 2) return std::nullopt;  // no specular vertex
       if (glm::length(hit->p - path.vertices.back().p) < 0.01) return std::nullopt;
       path.vertices.push_back(make_hslt_vertex(*hit, eta_here, eta_here));
+      // The same physical, non-grazing configurations as the sampled paths.
+      for (int i = 1; i < path.segments(); ++i)
+        if (!interior_vertex_ok(path, i)) return std::nullopt;
+      if (!endpoint_ok(path.vertices.front(), path.vertices[1]) ||
+          !endpoint_ok(path.vertices.back(), path.vertices[path.vertices.size() - 2]))
+        return std::nullopt;
       return path;
     }
     const Vec3 wo = -ray.d;
@@ -67,19 +113,6 @@ std::optional<HsltPath> trace_hslt_specular_path(const World& world, uint64_t se
     eta_here = eta_next;
   }
   return std::nullopt;
-}
-
-// A physical configuration at interior vertex i, away from the fold of the constraint: a
-// reflection has both directions on one side of the surface, a refraction one on each side,
-// neither grazing, and h is not near the tangent plane (where its orientation to the side of n
-// flips).
-bool interior_vertex_ok(const HsltPath& path, int i) {
-  const HsltVertex& x = path.vertices[static_cast<size_t>(i)];
-  const HsltHalfVector hv = hslt_half_vector(path, i);
-  const double cp = glm::dot(hv.w_prev, x.ng), cn = glm::dot(hv.w_next, x.ng);
-  const bool reflection = x.eta_prev == x.eta_next;
-  if (std::abs(cp) < 0.05 || std::abs(cn) < 0.05 || (cp * cn > 0) != reflection) return false;
-  return hv.H_len >= 0.05 && std::abs(glm::dot(hv.h, x.n)) >= 0.1;
 }
 
 std::optional<HsltPath> sample_hslt_connected_path(const World& world, HsltVertexMix mix, int segments, uint64_t seed,

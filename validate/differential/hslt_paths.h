@@ -1,8 +1,10 @@
 // Light paths for the half-vector constraint checks (lib/differential/hslt_*.h), built two ways:
-//  * traced: from the pinhole camera of a scene through a pixel, continued through every delta
-//    (specular) surface by reflection or refraction, ending at the first non-delta surface. The
-//    interior vertices are then specular (h^perp = 0, Kaplanyan 2014 Sec. 4.4); x_0 is the
-//    camera point (fixed), x_k the diffuse surface point (free);
+//  * traced: from the pinhole camera of a scene through a uniform raster position (even index),
+//    or from a uniform point on an area light towards a uniform point on a delta surface (odd
+//    index), continued through every delta (specular) surface by reflection or refraction,
+//    ending at the first non-delta surface. The interior vertices are then specular (h^perp = 0,
+//    Kaplanyan 2014 Sec. 4.4); x_0 is the camera point (a fixed point) or the light point (a
+//    surface point, free in the Jacobian checks), x_k the diffuse surface point;
 //  * sampled: k + 1 points sampled uniformly by area on the non-emitting shapes of a scene
 //    and connected vertex by vertex (each redrawn until the previous interior vertex is a
 //    physical reflection / refraction away from grazing and from h in the tangent plane), visibility ignored (the constraints
@@ -23,7 +25,8 @@
 
 namespace tb {
 
-// A specular chain traced from the camera; nullopt when the pixel sees no delta surface first,
+// A specular chain traced from the camera or a light (by index parity); nullopt when the first
+// surface hit is not a delta surface,
 // the chain escapes or hits an emitter, or it has more than max_segments segments.
 // Refractions are chosen with probability 1/2 at a dielectric (reflection on TIR).
 std::optional<HsltPath> trace_hslt_specular_path(const World& world, uint64_t seed, uint64_t key, int64_t index,
