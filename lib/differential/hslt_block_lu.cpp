@@ -70,4 +70,25 @@ Eigen::VectorXd HsltBlockLu::solve(const Eigen::VectorXd& b) const {
   return x.col(0);
 }
 
+bool hslt_inverse_last_block_row(const HsltBlocks& b, std::vector<Eigen::Matrix2d>* D) {
+  const int n = b.size();
+  if (n < 1) return false;
+  std::vector<Eigen::Matrix2d> At(static_cast<size_t>(n), Eigen::Matrix2d::Zero()),
+      Bt(static_cast<size_t>(n)), Ct(static_cast<size_t>(n), Eigen::Matrix2d::Zero());
+  for (int r = 0; r < n; ++r) {
+    const auto ur = static_cast<size_t>(r);
+    Bt[ur] = b.B[ur].transpose();
+    if (r > 0) At[ur] = b.C[ur - 1].transpose();
+    if (r + 1 < n) Ct[ur] = b.A[ur + 1].transpose();
+  }
+  const HsltBlockLu lu(At, Bt, Ct);
+  if (!lu.ok()) return false;
+  Eigen::MatrixXd e = Eigen::MatrixXd::Zero(2 * n, 2);
+  e.bottomRows<2>().setIdentity();
+  const Eigen::MatrixXd z = lu.solve(e);
+  D->resize(static_cast<size_t>(n));
+  for (int r = 0; r < n; ++r) (*D)[static_cast<size_t>(r)] = z.middleRows<2>(2 * r).transpose();
+  return z.allFinite();
+}
+
 }  // namespace tb

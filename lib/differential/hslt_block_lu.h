@@ -47,4 +47,11 @@ class HsltBlockLu {
   int failed_block_ = -1;
 };
 
+// The blocks D_i of Eq. 9 (Kaplanyan 2014): the last block row of J^{-1} (how x_{k-1}, the
+// vertex next to the sensor, moves per change of h_i^perp), D[r] = (J^{-1})_{n-1, r}, without the
+// inverse: the transposed system J^T Z = [0 .. 0; I] by the same block LU (blocks of J^T:
+// diagonal B_r^T, sub-diagonal C_{r-1}^T, super-diagonal A_{r+1}^T), D[r] = Z_r^T. O(k).
+// Returns false on a singular pivot.
+bool hslt_inverse_last_block_row(const HsltBlocks& b, std::vector<Eigen::Matrix2d>* D);
+
 }  // namespace tb

@@ -48,6 +48,19 @@ TEST(HsltBlockLu, DeterminantAndSolveMatchDenseLu) {
   }
 }
 
+TEST(HsltBlockLu, Eq9BlocksAreTheLastBlockRowOfTheInverse) {
+  for (int n : {1, 2, 3, 7, 20, 63}) {
+    const HsltBlocks b = random_blocks(n, 4);
+    std::vector<Eigen::Matrix2d> D;
+    ASSERT_TRUE(hslt_inverse_last_block_row(b, &D)) << n;
+    const Eigen::MatrixXd inv = hslt_dense_jacobian(b).inverse();
+    for (int r = 0; r < n; ++r)
+      EXPECT_LT((D[static_cast<size_t>(r)] - inv.block<2, 2>(2 * (n - 1), 2 * r)).cwiseAbs().maxCoeff(),
+                1e-12 * inv.cwiseAbs().maxCoeff())
+          << n << " " << r;
+  }
+}
+
 TEST(HsltBlockLu, IgnoresEndpointBlocks) {
   // A[0] and C[n-1] are the endpoint columns of Eq. 11, not part of the square J.
   HsltBlocks b = random_blocks(4, 5);
