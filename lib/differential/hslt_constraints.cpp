@@ -53,8 +53,8 @@ HsltHalfVectorDifferential hslt_half_vector_differential(const HsltHalfVector& h
   // dH = eta_prev dw_prev + eta_next dw_next; dw_prev = U_prev (dx_{i-1} - dx_i), likewise next.
   const Eigen::Matrix3d Up = eta_prev * unit_derivative(hv.w_prev, hv.l_prev);
   const Eigen::Matrix3d Un = eta_next * unit_derivative(hv.w_next, hv.l_next);
-  // dh = (I - h h^T) dH / |H| (the orientation sign of h cancels: (-h)(-h)^T = h h^T and the
-  // flipped h flips dH / |H| with it).
+  // h = sigma H / |H| with sigma = sign <h, H> = +-1 (the orientation to the side of n, locally
+  // constant): dh = sigma (I - h h^T) dH / |H|.
   const Eigen::Vector3d h = ev(hv.h);
   const double sign = glm::dot(hv.h, hv.H) < 0 ? -1.0 : 1.0;
   const Eigen::Matrix3d N = sign * (Eigen::Matrix3d::Identity() - h * h.transpose()) / hv.H_len;
