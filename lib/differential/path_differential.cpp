@@ -105,10 +105,20 @@ std::optional<ForwardPath> trace_forward(const World& world, const Vec2& pixel, 
     std::optional<Hit> hit = scene.intersect(ray);
     if (!hit) return std::nullopt;
     // The vertex on the un-offset ray: one step to the tangent plane at the hit removes the
-    // spawn offset along ng (at most p_error, position-dependent only through rounding bounds).
-    if (j > 1) {
-      const Vec3& o = path.vertices.back().p;
-      hit->p = o + (glm::dot(hit->p - o, hit->ng) / glm::dot(ray.d, hit->ng)) * ray.d;
+    // spawn offset along ng (at most p_error, position-dependent only through rounding bounds)
+    // and, on meshes, the clamping of barycentrics into the triangle Embree's float test chose.
+    // Analytic shapes are re-intersected along the un-offset ray, so that the normal and its
+    // derivatives belong to the moved point too (the offset hit lies up to offset / cos away).
+    const Vec3 o = j == 1 ? path.eye : path.vertices.back().p;
+    const double t_plane = glm::dot(hit->p - o, hit->ng) / glm::dot(ray.d, hit->ng);
+    if (j > 1 && !scene.is_mesh(hit->shape_id)) {
+      const uint32_t id = hit->shape_id;
+      const auto exact = scene.analytic(id).intersect(Ray{o, ray.d}, 0.5 * t_plane, 2.0 * t_plane);
+      if (!exact) return std::nullopt;
+      hit = *exact;
+      hit->shape_id = id;
+    } else {
+      hit->p = o + t_plane * ray.d;
     }
     path.vertices.push_back(*hit);
     if (j == k) break;

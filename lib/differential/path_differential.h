@@ -6,9 +6,12 @@
 // (raster = pixel + u_0, as the path tracer's CameraDim::kFilmX, kFilmY), u_j = the two direction uniforms of the BSDF sample at vertex x_j.
 // X(U) = (x_1, ..., x_k), the first k surface vertices, traced exactly as the path tracer does
 // (Camera::generate_primary_ray, Scene::intersect, SurfaceScatter::sample, spawn_ray), except that
-// each vertex is moved from the offset ray's hit to the un-offset ray's (one tangent-plane step
-// of at most the spawn offset, ~1e-7 on float meshes): the offset follows rounding-error bounds,
-// whose dependence on position would otherwise enter dX/dU at ~1e-6 relative. Discrete
+// each vertex is moved from the offset ray's hit to the un-offset ray's: analytic shapes are
+// re-intersected along the un-offset ray (with the hit's differential geometry), mesh hits are
+// stepped to the triangle's plane along the ray. The spawn offset (up to ~1e-6 on float meshes)
+// follows rounding-error bounds, and the offset hit lies offset / cos away along the surface, so
+// its normal would enter dX/dU at ~1e-5 relative; a mesh hit near an edge also has its
+// barycentrics clamped into the triangle Embree's float test chose. Discrete
 // lobe selection (reflection vs. transmission) is not part of U: it is held fixed per bounce, as
 // the derivative of App. B is the derivative within one lobe (the dimension-matched map X(A) of
 // App. B.1 restricted to that lobe's subset of A). trace_forward realises a fixed lobe through
