@@ -6,6 +6,7 @@
 #include "lib/core/frame.h"
 #include "lib/core/rng.h"
 #include "lib/geometry/spawn.h"
+#include "lib/material/half_vector.h"
 #include "lib/material/rough_conductor.h"
 #include "lib/material/rough_dielectric.h"
 #include "lib/path/scattering.h"
@@ -264,6 +265,41 @@ SamplingDerivative sampling_derivative(const Bsdf& bsdf, const Hit& hit, const V
   return out;
 }
 
+SamplingDerivative halfvector_derivative(const Bsdf& bsdf, const Hit& hit, const Vec3& wo, const Vec3& wi,
+                                         uint32_t flags, double pdf) {
+  const bool transmissive = (bsdf.flags() & bsdf_flags::kTransmission) != 0;
+  const double sn = (!transmissive && glm::dot(wo, hit.ng) < 0) ? -1.0 : 1.0;
+  const Vec3 nf = sn * hit.n;
+  const Frame F = Frame::from_z(nf);
+  Mat3 dS, dT;
+  frame_derivative(nf, &dS, &dT);
+  SamplingDerivative out;
+  out.wi = wi;
+  Mat3 r_w, r_m;
+  if (flags & bsdf_flags::kTransmission) {
+    out.kind = LobeKind::kRefract;
+    out.eta = glm::dot(wo, nf) > 0 ? bsdf.eta() : 1.0 / bsdf.eta();
+    out.m = generalized_half_vector(wi, wo, out.eta, 1.0, wo);  // on wo's side
+    refract_derivative(wo, out.m, out.eta, &r_w, &r_m);
+  } else {
+    out.kind = LobeKind::kReflect;
+    out.m = glm::normalize(wo + wi);
+    reflect_derivative(wo, out.m, &r_w, &r_m);
+  }
+  const Vec3 ml = F.to_local(out.m);  // held fixed in the frame
+  out.dm_dn = sn * (ml.x * dS + ml.y * dT + ml.z * Mat3::Identity());
+  out.d_wo = r_w;
+  out.d_n = r_m * out.dm_dn;
+  if (!(flags & bsdf_flags::kDelta)) {
+    Vec3 b1, b2;
+    coordinate_system(out.m, &b1, &b2);
+    const double scale = std::sqrt(half_vector_jacobian(wo, wi, 1.0, out.eta) / pdf);
+    out.dm_du = columns(b1, b2) * scale;
+    out.d_u = r_m * out.dm_du;
+  }
+  return out;
+}
+
 Mat32 camera_direction_derivative(const Camera& camera, const Vec2& raster) {
   // PinholeCamera::direction_through: d = unit(c), c = right px + up py + forward, with
   // (px, py) = plane_from_raster(raster) affine in the raster position.
@@ -308,7 +344,7 @@ StepBlocks camera_blocks(const ForwardPath& path, const PathDifferential& d) {
 }
 
 PathDifferential differentiate(const World& world, const Vec2& pixel, const ForwardPath& path,
-                              const Eigen::VectorXd& U) {
+                              const Eigen::VectorXd& U, BounceParameterisation param) {
   PathDifferential d;
   d.k = static_cast<int>(path.vertices.size());
   for (const Hit& h : path.vertices) d.geometry.push_back(vertex_geometry(h));
@@ -316,8 +352,10 @@ PathDifferential differentiate(const World& world, const Vec2& pixel, const Forw
   for (int j = 1; j < d.k; ++j) {
     const Hit& h = path.vertices[j - 1];
     const Vec3 wo = -(j == 1 ? path.camera_dir : path.wi[j - 2]);
-    d.sampling.push_back(sampling_derivative(*world.surface(h.shape_id).bsdf, h, wo, Vec2(U[2 * j], U[2 * j + 1]),
-                                             path.flags[j - 1]));
+    const Bsdf& bsdf = *world.surface(h.shape_id).bsdf;
+    d.sampling.push_back(param == BounceParameterisation::kHalfVector
+                             ? halfvector_derivative(bsdf, h, wo, path.wi[j - 1], path.flags[j - 1], path.pdf[j - 1])
+                             : sampling_derivative(bsdf, h, wo, Vec2(U[2 * j], U[2 * j + 1]), path.flags[j - 1]));
     d.max_direction_mismatch =
         std::max(d.max_direction_mismatch, glm::length(d.sampling.back().wi - path.wi[j - 1]));
   }

@@ -131,6 +131,16 @@ void refract_derivative(const Vec3& w, const Vec3& m, double eta, Mat3* d_w, Mat
 SamplingDerivative sampling_derivative(const Bsdf& bsdf, const Hit& hit, const Vec3& wo, const Vec2& u,
                                        uint32_t flags);
 
+// The half-vector parameterisation of a bounce (Sec. 6.4 "Practical Halfvector Derivatives",
+// App. B.3): the (generalised) half vector m of (wo, wi) is held fixed in the local shading frame
+// and moved by two coordinates h in the plane orthogonal to it, wi = reflect / refract(wo, m(h)).
+// The columns are scaled isotropically by sqrt(|dh/di| / p(i)) so that |dx/du| = |dx/dh| |dh/di|
+// / p(i) (App. B.3, densities preserved): dx_k/du_i ~ dx_k/dh_i |dh_i/di_i|^1/2 / sqrt(p(i_i)).
+// Delta lobes have no random variable (d_u = 0). For peaky lobes this approximates the PSS
+// derivative; for a diffuse lobe it differs (in PSS the sampled wi does not follow wo at all).
+SamplingDerivative halfvector_derivative(const Bsdf& bsdf, const Hit& hit, const Vec3& wo, const Vec3& wi,
+                                         uint32_t flags, double pdf);
+
 // Camera derivative d(unit primary direction)/d raster (= d/d film uniform; pinhole), 3x2.
 Mat32 camera_direction_derivative(const Camera& camera, const Vec2& raster);
 
@@ -160,9 +170,16 @@ StepBlocks step_blocks(const ForwardPath& path, const PathDifferential& d, int j
 // The camera step (j = 0).
 StepBlocks camera_blocks(const ForwardPath& path, const PathDifferential& d);
 
+// How a bounce's two random variables enter the blocks.
+enum class BounceParameterisation : uint8_t {
+  kPrimarySample,  // the BSDF sampling routine's uniforms (exact derivative of X(U))
+  kHalfVector,     // halfvector_derivative (App. B.3)
+};
+
 // Geometry, sampling derivatives and the blocks of every step.
 PathDifferential differentiate(const World& world, const Vec2& pixel, const ForwardPath& path,
-                              const Eigen::VectorXd& U);
+                              const Eigen::VectorXd& U,
+                              BounceParameterisation param = BounceParameterisation::kPrimarySample);
 
 // The full recurrence, Eq. 44, one column pair u_i at a time (O(k^2)): phi[i][j] = dxi_j/du_i
 // (2x2, j = 0..k; j = 0 is the fixed eye), for blocks of any origin.

@@ -14,10 +14,28 @@ VarianceRatio variance_ratio(const EndpointCovariance& c) {
   VarianceRatio out;
   out.V.row(0) = es.eigenvectors().col(3).transpose();
   out.V.row(1) = es.eigenvectors().col(2).transpose();
-  out.det_full = (out.V * c.sigma * out.V.transpose()).determinant();
-  out.det_camera = (out.V * c.sigma_camera * out.V.transpose()).determinant();
-  out.r = std::sqrt(out.det_full / out.det_camera);  // Eq. 20
+  return variance_ratio(c, out.V);  // Eq. 20
+}
+
+VarianceRatio variance_ratio(const EndpointCovariance& c, const Eigen::Matrix<double, 2, 4>& V) {
+  VarianceRatio out;
+  out.V = V;
+  out.det_full = (V * c.sigma * V.transpose()).determinant();
+  out.det_camera = (V * c.sigma_camera * V.transpose()).determinant();
+  out.r = std::sqrt(out.det_full / out.det_camera);
   return out;
+}
+
+Eigen::Matrix<double, 2, 4> position_plane() {
+  Eigen::Matrix<double, 2, 4> V = Eigen::Matrix<double, 2, 4>::Zero();
+  V(0, 0) = V(1, 1) = 1.0;
+  return V;
+}
+
+Eigen::Matrix<double, 2, 4> direction_plane() {
+  Eigen::Matrix<double, 2, 4> V = Eigen::Matrix<double, 2, 4>::Zero();
+  V(0, 2) = V(1, 3) = 1.0;
+  return V;
 }
 
 double refraction_solid_angle_ratio(const Vec3& wo, const Vec3& wi, const Vec3& m, double eta) {

@@ -24,8 +24,13 @@ struct VarianceRatio {
   double det_full = 0.0, det_camera = 0.0;  // |V Sigma V^T|, |V Sigma_d V^T|
 };
 
-// Eq. 20 from the covariances of Eq. 18.
+// Eq. 20 from the covariances of Eq. 18, V the PCA plane of Sigma (Sec. 6.3).
 VarianceRatio variance_ratio(const EndpointCovariance& c);
+// Eq. 20 with a fixed projection V (e.g. an axis-aligned one: the position plane rows (I 0), the
+// direction plane rows (0 I), the projections App. C.1 bounds Eq. 21 for).
+VarianceRatio variance_ratio(const EndpointCovariance& c, const Eigen::Matrix<double, 2, 4>& V);
+Eigen::Matrix<double, 2, 4> position_plane();
+Eigen::Matrix<double, 2, 4> direction_plane();
 
 struct DerivativeFreeRatio {
   double r = 1.0;
