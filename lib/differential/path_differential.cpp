@@ -85,6 +85,10 @@ Vec3 microfacet_normal_derivative(const MicrofacetDistribution& dist, const Vec2
 
 }  // namespace
 
+namespace {
+constexpr double kMinSegment = 1e-4;  // scene units
+}  // namespace
+
 double lobe_uniform(bool transmission) { return transmission ? 1.0 - 0x1p-53 : 0.0; }
 
 std::optional<ForwardPath> trace_forward(const World& world, const Vec2& pixel, const Eigen::VectorXd& U, int k,
@@ -151,6 +155,12 @@ std::optional<SampledPath> sample_path(const World& world, int k, uint64_t seed,
     for (int j = 0; j < k - 1; ++j) s.lobe[j] = lobe_uniform((drawn->flags[j] & bsdf_flags::kTransmission) != 0);
     auto held = trace_forward(world, s.pixel, s.U, k, s.lobe);
     if (!held || held->flags != drawn->flags || vertex_vector(*held) != vertex_vector(*drawn)) continue;
+    // Degenerate paths (two vertices within 1e-4, e.g. a grazing ray re-hitting its own surface):
+    // the direction derivatives divide by the segment length.
+    bool degenerate = glm::length(held->vertices[0].p - held->eye) < kMinSegment;
+    for (int j = 1; j < k; ++j)
+      degenerate = degenerate || glm::length(held->vertices[j].p - held->vertices[j - 1].p) < kMinSegment;
+    if (degenerate) continue;
     s.path = std::move(*held);
     return s;
   }

@@ -83,7 +83,8 @@ std::optional<ForwardPath> trace_forward(const World& world, const Vec2& pixel, 
 // A path of k vertices sampled for checks and benchmarks: a pixel and U (film and bounce
 // uniforms in [margin, 1 - margin]^2), lobes drawn with a uniform and then held fixed
 // (lobe_uniform), so that trace_forward(world, pixel, U, k, lobe) reproduces `path`. Up to `attempts`
-// draws from the stream of (seed, key, index); nothing when none gives k vertices.
+// draws from the stream of (seed, key, index); nothing when none gives k vertices. Paths with
+// two consecutive vertices (or x_1 and the eye) closer than 1e-4 are not returned.
 struct SampledPath {
   Vec2 pixel{0.0};
   Eigen::VectorXd U;
