@@ -91,6 +91,27 @@ constexpr double kMinSegment = 1e-4;  // scene units
 
 double lobe_uniform(bool transmission) { return transmission ? 1.0 - 0x1p-53 : 0.0; }
 
+std::optional<Hit> next_vertex(const Scene& scene, const Ray& ray, const Vec3& origin, bool offset) {
+  std::optional<Hit> hit = scene.intersect(ray);
+  if (!hit) return std::nullopt;
+  // The vertex on the un-offset ray: one step to the tangent plane at the hit removes the
+  // spawn offset along ng (at most p_error, position-dependent only through rounding bounds)
+  // and, on meshes, the clamping of barycentrics into the triangle Embree's float test chose.
+  // Analytic shapes are re-intersected along the un-offset ray, so that the normal and its
+  // derivatives belong to the moved point too (the offset hit lies up to offset / cos away).
+  const double t_plane = glm::dot(hit->p - origin, hit->ng) / glm::dot(ray.d, hit->ng);
+  if (offset && !scene.is_mesh(hit->shape_id)) {
+    const uint32_t id = hit->shape_id;
+    const auto exact = scene.analytic(id).intersect(Ray{origin, ray.d}, 0.5 * t_plane, 2.0 * t_plane);
+    if (!exact) return std::nullopt;
+    hit = *exact;
+    hit->shape_id = id;
+  } else {
+    hit->p = origin + t_plane * ray.d;
+  }
+  return hit;
+}
+
 std::optional<ForwardPath> trace_forward(const World& world, const Vec2& pixel, const Eigen::VectorXd& U, int k,
                                          const std::vector<double>& lobe) {
   const Camera& cam = world.camera();
@@ -107,24 +128,8 @@ std::optional<ForwardPath> trace_forward(const World& world, const Vec2& pixel, 
   Ray ray = cr.ray;
   const Scene& scene = world.geometry();
   for (int j = 1; j <= k; ++j) {
-    std::optional<Hit> hit = scene.intersect(ray);
+    const std::optional<Hit> hit = next_vertex(scene, ray, j == 1 ? path.eye : path.vertices.back().p, j > 1);
     if (!hit) return std::nullopt;
-    // The vertex on the un-offset ray: one step to the tangent plane at the hit removes the
-    // spawn offset along ng (at most p_error, position-dependent only through rounding bounds)
-    // and, on meshes, the clamping of barycentrics into the triangle Embree's float test chose.
-    // Analytic shapes are re-intersected along the un-offset ray, so that the normal and its
-    // derivatives belong to the moved point too (the offset hit lies up to offset / cos away).
-    const Vec3 o = j == 1 ? path.eye : path.vertices.back().p;
-    const double t_plane = glm::dot(hit->p - o, hit->ng) / glm::dot(ray.d, hit->ng);
-    if (j > 1 && !scene.is_mesh(hit->shape_id)) {
-      const uint32_t id = hit->shape_id;
-      const auto exact = scene.analytic(id).intersect(Ray{o, ray.d}, 0.5 * t_plane, 2.0 * t_plane);
-      if (!exact) return std::nullopt;
-      hit = *exact;
-      hit->shape_id = id;
-    } else {
-      hit->p = o + t_plane * ray.d;
-    }
     path.vertices.push_back(*hit);
     if (j == k) break;
     const SurfaceInfo& surf = world.surface(hit->shape_id);

@@ -74,6 +74,10 @@ struct ForwardPath {
   std::vector<double> pdf;       // solid-angle pdf (delta: discrete lobe probability)
 };
 
+// The next vertex of a path: the hit of `ray` (spawned from `origin`, with the spawn offset when
+// `offset`) moved onto the un-offset ray from `origin` as described above.
+std::optional<Hit> next_vertex(const Scene& scene, const Ray& ray, const Vec3& origin, bool offset);
+
 // Traces X(U). U has 2k entries (u_0 = film uniforms in `pixel`, then 2 per bounce); `lobe` has k-1 uniforms
 // (lobe_uniform(...) to hold a lobe fixed, or any uniform for a freshly sampled path). Returns
 // nothing when the path cannot be extended to k vertices.

@@ -3,6 +3,8 @@
 //   differential.path.jacobian.<scene>      dX/dU (Eq. 44 recurrence) against finite differences
 //                                           of the forward map X(U): central h and h/2, Ridders
 //                                           (Ceres), Taylor slope 2 +- 0.1; paths of 1..8 vertices
+//   differential.path.jacobian.halfvector.<scene>   the half-vector blocks (App. B.3) against
+//                                           finite differences of the half-vector map
 //   differential.path.incremental           App. B.2's O(k) endpoint covariance == the O(k^2)
 //                                           recurrence (Eq. 18), relative 1e-10
 //   differential.path.variance_ratio.planar Eq. 21 (derivative-free) against Eq. 20 (full half-
@@ -12,6 +14,7 @@
 //   differential.path.jacobian.negative_control.dropped_curvature   dn/dx = 0 in the blocks
 //   differential.path.jacobian.negative_control.missing_eta         refraction derivative with eta = 1
 //   differential.path.jacobian.negative_control.transposed_block    g_u = A_j^-1 transposed
+//   differential.path.jacobian.halfvector.negative_control          half vector fixed in world space
 //   differential.path.incremental.negative_control                  B.2 update without A_j^-1 A_j^-T
 //   differential.path.variance_ratio.negative_control               Eq. 21 with the whole-image camera density
 //   differential.path.variance_ratio.curved.negative_control        Sigma_d from another parameterisation
@@ -26,7 +29,10 @@
 
 #include <fmt/format.h>
 
+#include "lib/core/frame.h"
 #include "lib/core/hash.h"
+#include "lib/geometry/spawn.h"
+#include "lib/material/half_vector.h"
 #include "lib/differential/path_differential.h"
 #include "lib/differential/variance_bound.h"
 #include "lib/scene/scene_loader.h"
@@ -115,11 +121,93 @@ std::vector<StepBlocks> blocks_without_eta(const ForwardPath& path, const PathDi
   return b;
 }
 
+// Half-vector blocks with the half vector held fixed in world space instead of the local frame
+// (its dependence on the normal, dm/dn, dropped).
+std::vector<StepBlocks> halfvector_blocks_world_fixed(const ForwardPath& path, const PathDifferential& d) {
+  PathDifferential broken = d;
+  for (SamplingDerivative& s : broken.sampling) s.d_n.setZero();  // BROKEN: d_n = dwi/dm dm/dn
+  std::vector<StepBlocks> b{d.blocks[0]};
+  for (int j = 1; j < d.k; ++j) b.push_back(step_blocks(path, broken, j));
+  return b;
+}
+
 // g_u = A_j^-1 of every bounce transposed.
 std::vector<StepBlocks> blocks_transposed(const ForwardPath&, const PathDifferential& d) {
   std::vector<StepBlocks> b = d.blocks;
   for (size_t j = 1; j < b.size(); ++j) b[j].g_u.transposeInPlace();  // BROKEN
   return b;
+}
+
+// --- the half-vector map (App. B.3) ---------------------------------------------------------------
+
+// The frozen base quantities of the half-vector parameterisation at each bounce: the half vector
+// in the local frame, the local basis orthogonal to it, and the density-preserving scale.
+struct HalfVectorBase {
+  std::vector<Vec3> ml0, b1, b2;
+  std::vector<double> scale;
+};
+
+Frame scatter_frame(const Bsdf& bsdf, const Hit& hit, const Vec3& wo) {
+  const bool transmissive = (bsdf.flags() & bsdf_flags::kTransmission) != 0;
+  const double sn = (!transmissive && glm::dot(wo, hit.ng) < 0) ? -1.0 : 1.0;
+  return Frame::from_z(sn * hit.n);
+}
+
+HalfVectorBase halfvector_base(const World& world, const ForwardPath& p) {
+  HalfVectorBase b;
+  for (size_t j = 0; j + 1 < p.vertices.size(); ++j) {
+    const Hit& h = p.vertices[j];
+    const Bsdf& bsdf = *world.surface(h.shape_id).bsdf;
+    const Vec3 wo = -(j == 0 ? p.camera_dir : p.wi[j - 1]);
+    const SamplingDerivative sd = halfvector_derivative(bsdf, h, wo, p.wi[j], p.flags[j], p.pdf[j]);
+    const Frame F = scatter_frame(bsdf, h, wo);
+    Vec3 t1, t2;
+    coordinate_system(sd.m, &t1, &t2);
+    b.ml0.push_back(F.to_local(sd.m));
+    b.b1.push_back(F.to_local(t1));
+    b.b2.push_back(F.to_local(t2));
+    b.scale.push_back((p.flags[j] & bsdf_flags::kDelta) ? 0.0
+                                                        : std::sqrt(half_vector_jacobian(wo, p.wi[j], 1.0, sd.eta) / p.pdf[j]));
+  }
+  return b;
+}
+
+// X(u_0, h_1, ..., h_{k-1}): the camera as in trace_forward; bounce j scatters wo about the half
+// vector m = frame(n) unit(ml0 + scale (h_1 b1 + h_2 b2)), held in the local frame (Sec. 6.4).
+std::optional<ForwardPath> trace_halfvector(const World& world, const SampledPath& sp, const HalfVectorBase& hb,
+                                            const Eigen::VectorXd& V, int k) {
+  const Camera& cam = world.camera();
+  const CameraPrimaryRay cr = cam.generate_primary_ray(sp.pixel + Vec2(V[0], V[1]), Vec2(0.5));
+  ForwardPath path;
+  path.eye = cr.ray.o;
+  path.camera_dir = cr.ray.d;
+  Ray ray = cr.ray;
+  for (int j = 1; j <= k; ++j) {
+    const auto hit = next_vertex(world.geometry(), ray, j == 1 ? path.eye : path.vertices.back().p, j > 1);
+    if (!hit) return std::nullopt;
+    path.vertices.push_back(*hit);
+    if (j == k) break;
+    const Bsdf* bsdf = world.surface(hit->shape_id).bsdf;
+    if (!bsdf) return std::nullopt;
+    const size_t b = static_cast<size_t>(j - 1);
+    const Vec3 wo = -ray.d;
+    const Frame F = scatter_frame(*bsdf, *hit, wo);
+    const Vec3 m = F.to_world(glm::normalize(hb.ml0[b] + hb.scale[b] * (V[2 * j] * hb.b1[b] + V[2 * j + 1] * hb.b2[b])));
+    Vec3 wi;
+    if (sp.path.flags[b] & bsdf_flags::kTransmission) {
+      const double eta = glm::dot(wo, F.n) > 0 ? bsdf->eta() : 1.0 / bsdf->eta();
+      const auto t = refract(wo, m, eta);
+      if (!t) return std::nullopt;
+      wi = *t;
+    } else {
+      wi = reflect(wo, m);
+    }
+    path.wi.push_back(wi);
+    path.flags.push_back(sp.path.flags[b]);
+    path.pdf.push_back(sp.path.pdf[b]);
+    ray = spawn_ray(path.vertices.back(), wi);
+  }
+  return path;
 }
 
 // --- the finite-difference check --------------------------------------------------------------
@@ -139,7 +227,7 @@ std::string lobe_name(const Bsdf& bsdf, uint32_t flags) {
 }
 
 JacobianRun run_jacobian(const World& world, const std::string& key_name, const CheckContext& ctx,
-                         const BlockBuilder& builder) {
+                         const BlockBuilder& builder, bool halfvector = false) {
   JacobianRun run;
   run.configs = ctx.size(64, 512);
   const uint64_t key = hash_string(key_name);
@@ -156,20 +244,27 @@ JacobianRun run_jacobian(const World& world, const std::string& key_name, const 
       ++run.lobe_counts[lobe_name(*world.surface(sp->path.vertices[j].shape_id).bsdf, sp->path.flags[j])];
     const ForwardPath& base = sp->path;
     const Eigen::VectorXd base_x = vertex_vector(base);
+    const HalfVectorBase hb = halfvector ? halfvector_base(world, base) : HalfVectorBase{};
+    // The forward map: X(U) of the path tracer, or the half-vector map of (u_0, h), h = 0 at the base.
+    const auto forward = [&](const Eigen::VectorXd& U) {
+      if (!halfvector) return trace_forward(world, sp->pixel, U, k, sp->lobe);
+      return trace_halfvector(world, *sp, hb, U, k);
+    };
     // Local coordinates v = 1 + (U - U0)/s, f~(v) = X(U)/s, so that df~/dv = dX/dU. Three passes:
     // central differences (h, h/2) at s = 2^-5 (at s = 1 their truncation error behind several
     // curved mirrors reaches 1e-5, while Ridders and Taylor agree with J to 1e-10); Ridders (Ceres: initial step 1e-2 |v|) at s = 2^-12
     // and the Taylor test (steps 1e-2 2^-k) at s = 2^-8, so that their larger steps stay where
     // the path keeps its structure (shapes hit, lobes); at s = 1 they cross structure changes;
     // at s = 2^-12 the central differences would drown in rounding. A skip in any pass skips the path.
-    const Eigen::VectorXd U0 = sp->U;
+    Eigen::VectorXd U0 = sp->U;
+    if (halfvector) U0.tail(2 * k - 2).setZero();
     bool jumped = false;  // a structure change inside a stencil
     const auto fd_pass = [&](double scale, bool central, bool ridders, bool taylor) {
       const auto to_u = [&U0, scale](const Eigen::VectorXd& v) -> Eigen::VectorXd {
         return U0 + scale * (v.array() - 1.0).matrix();
       };
       const auto f = [&, scale](const Eigen::VectorXd& v) -> Eigen::VectorXd {
-        const auto p = trace_forward(world, sp->pixel, to_u(v), k, sp->lobe);
+        const auto p = forward(to_u(v));
         bool same = p.has_value() && p->flags == base.flags;
         // Triangles of one mesh face are coplanar only up to float rounding: a change of triangle
         // is a (1e-7) kink, counted as a structure change too.
@@ -184,9 +279,11 @@ JacobianRun run_jacobian(const World& world, const std::string& key_name, const 
       };
       const auto jac = [&](const Eigen::VectorXd& v) -> Eigen::MatrixXd {
         const Eigen::VectorXd U = to_u(v);
-        const auto p = trace_forward(world, sp->pixel, U, k, sp->lobe);
+        const auto p = forward(U);
         if (!p) return Eigen::MatrixXd::Constant(3 * k, 2 * k, std::nan(""));
-        const PathDifferential d = differentiate(world, sp->pixel, *p, U);
+        const PathDifferential d =
+            halfvector ? differentiate(world, sp->pixel, *p, U, BounceParameterisation::kHalfVector)
+                       : differentiate(world, sp->pixel, *p, U);
         run.worst_direction = std::max(run.worst_direction, d.max_direction_mismatch);
         return vertex_jacobian(d.geometry, builder(*p, d));
       };
@@ -244,8 +341,9 @@ std::string lobe_summary(const JacobianRun& r) {
   return s;
 }
 
-CheckResult jacobian_check(const std::string& scene_name, const CheckContext& ctx) {
-  const JacobianRun r = run_jacobian(scene(scene_name), "differential.path.jacobian." + scene_name, ctx, correct_blocks);
+CheckResult jacobian_check(const std::string& scene_name, const CheckContext& ctx, bool halfvector = false) {
+  const std::string key = std::string("differential.path.jacobian.") + (halfvector ? "halfvector." : "") + scene_name;
+  const JacobianRun r = run_jacobian(scene(scene_name), key, ctx, correct_blocks, halfvector);
   CheckResult out;
   // Every length 1..8 must have been checked at least once.
   const bool all_lengths = static_cast<int>(r.per_length.size()) == kMaxVertices;
@@ -265,9 +363,9 @@ CheckResult jacobian_check(const std::string& scene_name, const CheckContext& ct
 }
 
 CheckResult jacobian_negative_control(const std::string& scene_name, const std::string& what,
-                                      const BlockBuilder& broken, const CheckContext& ctx) {
+                                      const BlockBuilder& broken, const CheckContext& ctx, bool halfvector = false) {
   const JacobianRun r =
-      run_jacobian(scene(scene_name), "differential.path.jacobian.negative_control." + what, ctx, broken);
+      run_jacobian(scene(scene_name), "differential.path.jacobian.negative_control." + what, ctx, broken, halfvector);
   CheckResult out;
   out.passed = r.failed > 0;  // the broken Jacobian must be caught
   out.statistic_name = "failed configurations";
@@ -615,6 +713,20 @@ struct DifferentialPathChecks {
                               "paths of 1..8 vertices",
                .kind = CheckKind::kDeterministic,
                .run = [s](const CheckContext& ctx) { return jacobian_check(s, ctx); }});
+    for (const std::string s : {"cornell-box", "glossy", "dg-glass"})
+      reg.add({.name = "differential.path.jacobian.halfvector." + s,
+               .description = "Half-vector blocks (App. B.3) on " + s +
+                              " against finite differences of the half-vector map (camera u_0, then h per bounce, half "
+                              "vectors held in the local frame): central, Ridders (tol 1e-6), Taylor slope 2 +- 0.1",
+               .kind = CheckKind::kDeterministic,
+               .run = [s](const CheckContext& ctx) { return jacobian_check(s, ctx, true); }});
+    reg.add({.name = "differential.path.jacobian.halfvector.negative_control",
+             .description = "Half-vector blocks with the half vector fixed in world space (dm/dn dropped) on glossy must fail",
+             .kind = CheckKind::kDeterministic,
+             .run = [](const CheckContext& ctx) {
+               return jacobian_negative_control("glossy", "half vector fixed in world space",
+                                                halfvector_blocks_world_fixed, ctx, true);
+             }});
     reg.add({.name = "differential.path.jacobian.negative_control.dropped_curvature",
              .description = "Blocks without the dn/dx (curvature) term on dg-curved-mirrors must fail the finite-difference check",
              .kind = CheckKind::kDeterministic,
