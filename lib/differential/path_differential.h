@@ -167,7 +167,7 @@ struct PathDifferential {
 };
 
 // Transfer of a ray moving by (dx origin, t dwi) onto the tangent plane at the hit:
-// Q = I - wi N^T / (N . wi) (Igehy 1999, Eq. 9-10 with a planar surface).
+// Q = I - wi N^T / (N . wi) (the transfer of Igehy 1999, "Tracing Ray Differentials", onto a plane).
 Mat3 transfer_matrix(const Vec3& wi, const Vec3& n_next);
 
 // The blocks of step j (>= 1) from the path's geometry and sampling derivatives (Eq. 43-44).
