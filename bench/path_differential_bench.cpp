@@ -4,7 +4,7 @@
 // far beyond a rendered path; the real per-path cost (trace, differentiate, covariance) is
 // measured on cornell-box for k = 2..8. After the runs the least-squares slopes of log(time)
 // against log(k) (CPU time) are printed (expected: 1 and 2).
-//   ./build/bench/path_differential_bench
+//   ./build/bench/path_differential_bench   (scenes from $TB_SCENES_DIR or found upwards, see scenes_dir())
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -17,6 +17,7 @@
 #include "lib/core/rng.h"
 #include "lib/differential/path_differential.h"
 #include "lib/scene/scene_loader.h"
+#include "validate/render/render_compare.h"
 
 namespace {
 
@@ -63,7 +64,7 @@ BENCHMARK(BM_FullRecurrence)->RangeMultiplier(2)->Range(8, 512);
 
 // A rendered path: trace X(U), differentiate (blocks), covariance by the incremental form.
 void BM_CornellPath(benchmark::State& state) {
-  static const std::unique_ptr<World> world = load_world(std::string(TB_SOURCE_DIR) + "/scenes/cornell-box.json");
+  static const std::unique_ptr<World> world = load_world(scenes_dir() + "/cornell-box.json");
   const int k = static_cast<int>(state.range(0));
   const auto sp = sample_path(*world, k, 1, 3, 0);
   if (!sp) {
