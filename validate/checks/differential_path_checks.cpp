@@ -48,10 +48,13 @@ using DMat3 = differential::Mat3;
 using DMat4 = differential::Mat4;
 
 constexpr int kMaxVertices = 8;           // paths of 1..8 vertices
-constexpr double kFdTolerance = 1e-6;     // relative, fd_jacobian.h defaults (central, Ridders)
+constexpr double kFdTolerance = 1e-6;     // relative, Ridders (fd_jacobian.h default)
+constexpr double kCentralTolerance = 1e-5;  // relative, central differences (see fd_pass)
 constexpr double kSlopeTolerance = 0.1;   // Taylor slope 2 +- 0.1
 constexpr double kDirectionTolerance = 1e-9;  // recomputed wi vs sampled wi
 constexpr double kIncrementalTolerance = 1e-10;
+// Rounding of the O(k^2) sums whose terms cancel (measured worst 5.9e-16 of their magnitude).
+constexpr double kUncancelledTolerance = 1e-13;
 constexpr int kAttempts = 1024;            // draws per path before a length counts as not sampled
 // r~ of Eq. 20 comes from determinants of 2x2 projections of near-singular 4x4 covariances:
 // comparisons allow this relative rounding (all-delta paths give r_full = 1 + 8e-9).
@@ -232,7 +235,8 @@ JacobianRun run_jacobian(const World& world, const std::string& key_name, const 
   run.configs = ctx.size(64, 512);
   const uint64_t key = hash_string(key_name);
   stats::FdOptions opt;
-  opt.tolerance = opt.ridders_tolerance = kFdTolerance;
+  opt.tolerance = kCentralTolerance;
+  opt.ridders_tolerance = kFdTolerance;
   opt.slope_tolerance = kSlopeTolerance;
   opt.seed = hash_values(ctx.seed, key);
   for (int64_t i = 0; i < run.configs; ++i) {
@@ -252,7 +256,9 @@ JacobianRun run_jacobian(const World& world, const std::string& key_name, const 
     };
     // Local coordinates v = 1 + (U - U0)/s, f~(v) = X(U)/s, so that df~/dv = dX/dU. Three passes:
     // central differences (h, h/2) at s = 2^-5 (at s = 1 their truncation error behind several
-    // curved mirrors reaches 1e-5, while Ridders and Taylor agree with J to 1e-10); Ridders (Ceres: initial step 1e-2 |v|) at s = 2^-12
+    // curved mirrors reaches 1e-5, while Ridders and Taylor agree with J to 1e-10; even at s = 2^-5
+    // one of 489 full-size paths reaches 3.5e-6, and at 2^-3, 2^-4, 2^-7 one or more others do:
+    // central differences are held to kCentralTolerance, Ridders' extrapolation to kFdTolerance); Ridders (Ceres: initial step 1e-2 |v|) at s = 2^-12
     // and the Taylor test (steps 1e-2 2^-k) at s = 2^-8, so that their larger steps stay where
     // the path keeps its structure (shapes hit, lobes); at s = 1 they cross structure changes;
     // at s = 2^-12 the central differences would drown in rounding. A skip in any pass skips the path.
@@ -353,10 +359,10 @@ CheckResult jacobian_check(const std::string& scene_name, const CheckContext& ct
   out.samples = r.checked;
   out.message = fmt::format(
       "{}: {} of {} paths (1..{} vertices) checked, {} failed, {} skipped (discontinuity), {} not sampled; worst "
-      "central {:.2g}, Ridders {:.2g} (tol {:g}), worst |Taylor slope - 2| {:.3f} (tol {}), direction "
+      "central {:.2g} (tol {:g}), Ridders {:.2g} (tol {:g}), worst |Taylor slope - 2| {:.3f} (tol {}), direction "
       "recomputation {:.1e}; vertices: {}",
       scene_name, r.checked, r.configs, kMaxVertices, r.failed, r.skipped, r.configs - r.sampled, r.worst_rel,
-      r.worst_ridders, kFdTolerance, r.worst_slope_dev, kSlopeTolerance, r.worst_direction, lobe_summary(r));
+      kCentralTolerance, r.worst_ridders, kFdTolerance, r.worst_slope_dev, kSlopeTolerance, r.worst_direction, lobe_summary(r));
   if (!all_lengths) out.message += "; not every path length was checked";
   out.details = run_details(r);
   return out;
@@ -470,7 +476,9 @@ IncrementalRun run_incremental(const CheckContext& ctx, const CovarianceFn& incr
       run.worst_uncancelled = std::max(run.worst_uncancelled, err_unc);
       run.max_growth = std::max(run.max_growth, scale / std::max(1e-300, full.sigma.cwiseAbs().maxCoeff()));
       ++run.paths;
-      if (!(err <= kIncrementalTolerance)) ++run.over;
+      // Over tolerance: beyond 1e-10 of max |Sigma| and beyond rounding of the terms that cancel
+      // into it (kUncancelledTolerance of their magnitude): the recurrences disagree.
+      if (!(err <= kIncrementalTolerance) && !(err_unc <= kUncancelledTolerance)) ++run.over;
       if (!(err <= run.worst)) {
         run.worst = err;
         run.worst_where = fmt::format("{} path {} (k = {})", name, i, k);
@@ -489,8 +497,9 @@ CheckResult incremental_check(const CheckContext& ctx) {
   out.samples = r.paths;
   out.message = fmt::format(
       "O(k) incremental (App. B.2) vs O(k^2) recurrence (Eq. 44, 18): {} of {} paths over {:g} relative to max "
-      "|Sigma|, worst {:.2g} at {}; relative to the uncancelled terms (up to {:.2g} x max |Sigma|) worst {:.2g}",
-      r.over, r.paths, kIncrementalTolerance, r.worst, r.worst_where, r.max_growth, r.worst_uncancelled);
+      "|Sigma| and over {:g} of the uncancelled terms; worst {:.2g} of max |Sigma| at {}; relative to the "
+      "uncancelled terms (up to {:.2g} x max |Sigma|) worst {:.2g}",
+      r.over, r.paths, kIncrementalTolerance, kUncancelledTolerance, r.worst, r.worst_where, r.max_growth, r.worst_uncancelled);
   out.details = {{"paths", r.paths},
                  {"over_tolerance", r.over},
                  {"worst", r.worst},
@@ -709,7 +718,7 @@ struct DifferentialPathChecks {
     for (const std::string& s : jacobian_scenes())
       reg.add({.name = "differential.path.jacobian." + s,
                .description = "dX/dU of the path tracer's forward map by the Eq. 44 recurrence on " + s +
-                              " against central differences (h, h/2), Ridders (tol 1e-6) and a Taylor slope of 2 +- 0.1, "
+                              " against central differences (h, h/2; tol 1e-5), Ridders (tol 1e-6) and a Taylor slope of 2 +- 0.1, "
                               "paths of 1..8 vertices",
                .kind = CheckKind::kDeterministic,
                .run = [s](const CheckContext& ctx) { return jacobian_check(s, ctx); }});
@@ -717,7 +726,7 @@ struct DifferentialPathChecks {
       reg.add({.name = "differential.path.jacobian.halfvector." + s,
                .description = "Half-vector blocks (App. B.3) on " + s +
                               " against finite differences of the half-vector map (camera u_0, then h per bounce, half "
-                              "vectors held in the local frame): central, Ridders (tol 1e-6), Taylor slope 2 +- 0.1",
+                              "vectors held in the local frame): central (tol 1e-5), Ridders (tol 1e-6), Taylor slope 2 +- 0.1",
                .kind = CheckKind::kDeterministic,
                .run = [s](const CheckContext& ctx) { return jacobian_check(s, ctx, true); }});
     reg.add({.name = "differential.path.jacobian.halfvector.negative_control",
