@@ -29,11 +29,21 @@ WelchImage load_welch(const std::string& path) {
 
 int compare_images(const CompareArgs& a) {
   const WelchImage img_a = load_welch(a.inputs[0]), img_b = load_welch(a.inputs[1]);
-  const ImageCompareResult r = compare_welch_images(img_a, img_b, a.alpha);
+  ImageCompareOptions opt;
+  opt.skew_correction = a.skew_correction;
+  const ImageCompareResult r = compare_welch_images(img_a, img_b, a.alpha, opt);
   fmt::print("A: {}\nB: {}\n", a.inputs[0], a.inputs[1]);
   fmt::print("alpha {:g} (each of 3 tests {:.3g}, per pixel-channel {:.3g}); {} pixel-channels tested, {} identical "
              "skipped\n",
              r.alpha, r.alpha_each, r.alpha_pixel, r.tested, r.skipped_identical);
+  if (r.skew_corrected)
+    fmt::print("  t skew-corrected (Hall's transformation, from the stored third moments): valid where |c| is small "
+               "and a pixel's rare contributions were sampled; {} pixel-channels with |c| > 0.2 (max |c| {:.3g})\n",
+               r.skew_large, r.skew_max);
+  else if (opt.skew_correction)
+    fmt::print("  t not skew-corrected: {} has no moment3 channels (written by tb render since the skew "
+               "correction); heavy-tailed pixels may then reject consistent means\n",
+               img_a.has_third_moment() ? a.inputs[1] : a.inputs[0]);
   fmt::print("  pixel-wise (Sidak over pixel-channels): p = {:.4g}{}\n", r.p_pixel_family,
              r.rejects_pixel() ? "  REJECTS" : "");
   static const char* kChannel[] = {"R", "G", "B"};

@@ -23,6 +23,7 @@ struct CompareArgs {
   std::vector<std::string> inputs;  // A.exr B.exr, or SCENE
   double alpha = 0.01;
   std::string json_out;             // optional: the full result as JSON
+  bool skew_correction = false;     // Hall's transformation of t where moment3 is stored (experimental)
   CompareSceneArgs scene;           // the scene form's options (scene.scene is set from inputs)
   // Names of the options given on the command line that belong to one form only, so that using
   // them with the other form is reported instead of ignored.

@@ -207,10 +207,12 @@ int main(int argc, char** argv) {
       "fitted rates, efficiency, HTML report; docs/compare.md)");
   compare->add_option("inputs", cmpa.inputs, "A.exr B.exr (EXRs written by tb render), or one scene file")
       ->required()->expected(1, 2);
-  const std::vector<std::string> compare_image_opts = {"--alpha", "--json"};
+  const std::vector<std::string> compare_image_opts = {"--alpha", "--json", "--skew-correction"};
   compare->add_option("--alpha", cmpa.alpha, "A.exr B.exr: significance level of the whole comparison")
       ->capture_default_str();
   compare->add_option("--json", cmpa.json_out, "A.exr B.exr: write the full result to this JSON file");
+  compare->add_flag("--skew-correction", cmpa.skew_correction,
+                    "A.exr B.exr: Hall's skewness transformation of each pixel's t (experimental; docs/integrator.md)");
   tb::CompareSceneArgs& cs = cmpa.scene;
   const std::vector<std::string> compare_scene_opts = {"--integrators", "--time",  "--reference",   "--out",
                                                        "--checkpoints", "--resolution", "--seed", "--threads", "--pass-spp",

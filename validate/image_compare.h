@@ -15,6 +15,24 @@
 // unless both means are below sqrt(FLT_MIN) ~ 1.1e-19 in magnitude: images read from EXR carry
 // their variance in float, where the variance of such values (~mean^2) underflows to 0, so
 // there "zero variance" means "not stored", and those pixel-channels are skipped and counted.
+//
+// Skew correction (ImageCompareOptions::skew_correction, on in `tb compare`): a pixel whose Welch
+// samples are skewed (rare bright contributions) has a skewed t: the sample that misses its rare
+// samples has both a low mean and a small variance, so t is too often negative, and Stouffer's sum
+// over many pixels turns that into a rejection although the means agree. With the third central
+// moments of both images (WelchImage::has_third_moment, EXR channels moment3.*), t is replaced by
+// Hall's transformation (Hall 1992, "On the removal of skewness by transformation", JRSS B 54)
+//     t' = t + c (1 + 2 t^2) + (4/3) c^2 t^3,   c = kappa3(D) / (6 Var(D)^(3/2)),
+// D = mean_a - mean_b, kappa3(D) = k3_a / n_a^2 - k3_b / n_b^2, k3 = g s^3 the third cumulant of
+// one image's Welch samples with g their standardised skewness (unbiased k3 / s^3) pooled over a
+// 7x7 window (one pixel's few samples estimate it too noisily), Var(D) the Welch standard error
+// squared. It removes the n^(-1/2)
+// term of the Edgeworth expansion of the studentised difference,
+//     P(T <= x) = Phi(x) + c (2 x^2 + 1) phi(x) + O(1/n),
+// and is monotone ((1 + 2 c t)^2 >= 0). Its validity condition, reported: |c| small (the one-term
+// expansion; pixel-channels with |c| > 0.2 are counted), and the skew must be visible in the
+// samples: a pixel whose rare contributions no Welch sample caught has no measured skew and
+// stays uncorrected.
 #pragma once
 
 #include <cstdint>
@@ -33,8 +51,15 @@ struct PixelChannelTest {
   double t = 0, dof = 0, p = 1, z = 0;
 };
 
+struct ImageCompareOptions {
+  bool skew_correction = false;  // Hall's transformation of t, when both images have third moments
+};
+
 struct ImageCompareResult {
   double alpha = 0, alpha_each = 0, alpha_pixel = 0;
+  bool skew_corrected = false;      // the transformation was applied
+  int64_t skew_large = 0;           // pixel-channels with |c| > 0.2: the correction is unreliable there
+  double skew_max = 0;              // largest |c|
   int64_t tested = 0;               // P
   int64_t skipped_identical = 0;    // zero variance in both, equal means
   int64_t zero_variance_mismatch = 0;
@@ -58,5 +83,10 @@ struct ImageCompareResult {
 // Throws std::invalid_argument if the sizes differ or a pixel has fewer than two Welch samples
 // in both images.
 ImageCompareResult compare_welch_images(const WelchImage& a, const WelchImage& b, double alpha);
+ImageCompareResult compare_welch_images(const WelchImage& a, const WelchImage& b, double alpha,
+                                        const ImageCompareOptions& options);
+
+// Hall's transformation t' of a studentised statistic t with skewness coefficient c (see above).
+inline double hall_transform(double t, double c) { return t + c * (1.0 + 2.0 * t * t) + (4.0 / 3.0) * c * c * t * t * t; }
 
 }  // namespace tb

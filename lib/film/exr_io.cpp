@@ -16,6 +16,7 @@ namespace {
 
 constexpr const char* kRgbNames[3] = {"R", "G", "B"};
 constexpr const char* kVarNames[3] = {"variance.R", "variance.G", "variance.B"};
+constexpr const char* kM3Names[3] = {"moment3.R", "moment3.G", "moment3.B"};
 
 std::vector<float> plane(const std::vector<Rgb>& v, int c) {
   std::vector<float> out(v.size());
@@ -37,18 +38,22 @@ ExrImage exr_image_from_welch(const WelchImage& w) {
   e.rgb.resize(w.pixels());
   e.variance.emplace(w.pixels());
   e.count.emplace(w.pixels());
+  if (w.has_third_moment()) e.moment3.emplace(w.pixels());
   for (size_t i = 0; i < w.pixels(); ++i) {
     e.rgb[i] = w.mean(i);
     (*e.variance)[i] = w.variance(i);
     (*e.count)[i] = static_cast<uint32_t>(w.count[i]);
+    if (e.moment3) (*e.moment3)[i] = w.third_central_moment(i);
   }
   return e;
 }
 
 WelchImage welch_from_exr_image(const ExrImage& e) {
   WelchImage w(e.width, e.height);
+  if (!e.moment3) w.sum_cu.clear();
   for (size_t i = 0; i < w.pixels(); ++i)
-    w.set_from_moments(i, e.rgb[i], e.variance ? (*e.variance)[i] : Rgb(0.0), e.count ? (*e.count)[i] : 1);
+    w.set_from_moments(i, e.rgb[i], e.variance ? (*e.variance)[i] : Rgb(0.0), e.count ? (*e.count)[i] : 1,
+                       e.moment3 ? (*e.moment3)[i] : Rgb(0.0));
   return w;
 }
 
@@ -67,7 +72,7 @@ void write_exr(const std::string& path, const ExrImage& img, ExrPixelType rgb_ty
     // Planes stay alive until writePixels returns.
     std::vector<std::vector<float>> fplanes;
     std::vector<std::vector<half>> hplanes;
-    fplanes.reserve(7);
+    fplanes.reserve(10);
     hplanes.reserve(3);
     for (int c = 0; c < 3; ++c) {
       if (rgb_type == ExrPixelType::kHalf) {
@@ -86,6 +91,14 @@ void write_exr(const std::string& path, const ExrImage& img, ExrPixelType rgb_ty
         header.channels().insert(kVarNames[c], Imf::Channel(Imf::FLOAT));
         fplanes.push_back(plane(*img.variance, c));
         fb.insert(kVarNames[c], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(fplanes.back().data()), xs_f, ys_f));
+      }
+    }
+    if (img.moment3) {
+      if (img.moment3->size() != n) throw std::runtime_error("moment3 plane has the wrong size");
+      for (int c = 0; c < 3; ++c) {
+        header.channels().insert(kM3Names[c], Imf::Channel(Imf::FLOAT));
+        fplanes.push_back(plane(*img.moment3, c));
+        fb.insert(kM3Names[c], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(fplanes.back().data()), xs_f, ys_f));
       }
     }
     std::vector<uint32_t> count;
@@ -120,7 +133,8 @@ ExrImage read_exr(const std::string& path) {
     const Imf::ChannelList& ch = file.header().channels();
     const bool has_var = ch.findChannel(kVarNames[0]) && ch.findChannel(kVarNames[1]) && ch.findChannel(kVarNames[2]);
     const bool has_count = ch.findChannel("count") != nullptr;
-    std::vector<std::vector<float>> planes(has_var ? 6 : 3, std::vector<float>(n, 0.0f));
+    const bool has_m3 = ch.findChannel(kM3Names[0]) && ch.findChannel(kM3Names[1]) && ch.findChannel(kM3Names[2]);
+    std::vector<std::vector<float>> planes(9, std::vector<float>(n, 0.0f));
     std::vector<uint32_t> count(has_count ? n : 0);
     // The slice base is offset so that pixel (dw.min.x, dw.min.y) lands at index 0.
     const auto base = [&](auto* data, size_t elem) {
@@ -134,6 +148,9 @@ ExrImage read_exr(const std::string& path) {
     if (has_var)
       for (int c = 0; c < 3; ++c)
         fb.insert(kVarNames[c], Imf::Slice(Imf::FLOAT, base(planes[3 + c].data(), sizeof(float)), sizeof(float), ys));
+    if (has_m3)
+      for (int c = 0; c < 3; ++c)
+        fb.insert(kM3Names[c], Imf::Slice(Imf::FLOAT, base(planes[6 + c].data(), sizeof(float)), sizeof(float), ys));
     if (has_count)
       fb.insert("count", Imf::Slice(Imf::UINT, base(count.data(), sizeof(uint32_t)), sizeof(uint32_t),
                                     sizeof(uint32_t) * size_t(img.width)));
@@ -144,6 +161,10 @@ ExrImage read_exr(const std::string& path) {
     if (has_var) {
       img.variance.emplace(n);
       for (size_t i = 0; i < n; ++i) (*img.variance)[i] = Rgb(planes[3][i], planes[4][i], planes[5][i]);
+    }
+    if (has_m3) {
+      img.moment3.emplace(n);
+      for (size_t i = 0; i < n; ++i) (*img.moment3)[i] = Rgb(planes[6][i], planes[7][i], planes[8][i]);
     }
     if (has_count) img.count = std::move(count);
     return img;
