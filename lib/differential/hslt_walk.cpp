@@ -46,8 +46,11 @@ double path_residual(const HsltPath& path, const Eigen::VectorXd& target, Eigen:
   return F->norm();
 }
 
-// The first hit of the surface of `orig` on the ray from `origin` towards `toward`, skipping
-// other shapes (their presence is reported as kOccluded when `visibility` is on).
+// The hit of the surface of `orig` on the ray from `origin` towards `toward`.
+// With visibility: the first hit of the ray must be on that surface (another shape in front:
+// kOccluded). Without (paths connected through other shapes, the constraints being geometric):
+// of the hits of that surface along the ray, the one nearest to `toward` (a segment may cross
+// its own shape, e.g. a chord inside a concave mirror, so the first hit is not always meant).
 HsltWalkStatus cast_to_surface(const Scene& scene, const Vec3& origin, const Vec3& toward, const HsltVertex& orig,
                                bool visibility, Hit* out) {
   const Vec3 d = toward - origin;
@@ -56,19 +59,31 @@ HsltWalkStatus cast_to_surface(const Scene& scene, const Vec3& origin, const Vec
   // From the exact previous vertex with a small t_min, as the traced paths (hslt_paths.cpp): an
   // offset origin would tilt the segment and bias h^perp.
   Ray ray{origin, d / len, 1e-5 * std::max(1.0, glm::length(origin)), kInfinity};
-  bool blocked = false;
+  bool blocked = false, found = false;
+  double best = kInfinity;
   for (int s = 0; s < 64; ++s) {
     const std::optional<Hit> hit = scene.intersect(ray);
-    if (!hit) return HsltWalkStatus::kHitDifferentSurface;
+    if (!hit) break;
     if (hit->shape_id == orig.shape_id) {
-      if (hit->prim_id != orig.prim_id) return HsltWalkStatus::kHitDifferentSurface;
-      *out = *hit;
-      return blocked && visibility ? HsltWalkStatus::kOccluded : HsltWalkStatus::kConverged;
+      if (visibility) {
+        if (blocked) return HsltWalkStatus::kOccluded;
+        if (hit->prim_id != orig.prim_id) return HsltWalkStatus::kHitDifferentSurface;
+        *out = *hit;
+        return HsltWalkStatus::kConverged;
+      }
+      const double gap = std::abs(hit->t - len);
+      if (gap < best) {
+        best = gap;
+        *out = *hit;
+        found = true;
+      }
+      if (hit->t > len) break;  // later hits are farther from `toward`
     }
     blocked = true;
     ray.t_min = hit->t + 1e-9 * std::max(1.0, hit->t);
   }
-  return HsltWalkStatus::kHitDifferentSurface;
+  if (!found || out->prim_id != orig.prim_id) return HsltWalkStatus::kHitDifferentSurface;
+  return HsltWalkStatus::kConverged;
 }
 
 }  // namespace

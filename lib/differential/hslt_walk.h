@@ -20,6 +20,10 @@
 // walk projects from x_k (the paper's sensor side: x_{k-1}, x_{k-2}, ..), otherwise from x_0
 // (the paper's light side: x_1, x_2, ..). The side is chosen once, at the start path.
 //
+// With visibility on, the projected x_i is the first hit of the ray; off (the sampled paths of
+// the checks are connected through other shapes), the hit of the surface of x_i along the ray
+// nearest to the predicted point.
+//
 // Statuses. kHitDifferentSurface: the ray misses the surface of x_i, or meets it on another
 // primitive (another triangle of a mesh: another (u, v) chart and, on the cube, another normal,
 // i.e. another subspace of Sec. 5.2). kOccluded (only with visibility on): another shape lies

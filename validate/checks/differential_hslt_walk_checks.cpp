@@ -54,6 +54,7 @@ constexpr double kQuadraticDelta = 2e-2;
 constexpr double kResidualFloor = 1e-12;        // residuals below are rounding, not Newton
 constexpr double kOrderLow = 1.8, kOrderHigh = 2.2, kOrderMinP10 = 1.5;
 constexpr double kSlopeTolerance = 0.1;         // first-order: Taylor slope 2 +- 0.1
+constexpr double kFirstOrderDelta0 = 2e-3;      // first-order: delta = 2e-3 2^-m, m = 0 .. 7
 const std::array<double, 6> kSweep{1e-4, 1e-3, 1e-2, 3e-2, 0.1, 0.3};
 
 int path_count(const CheckContext& ctx) { return static_cast<int>(ctx.size(24, 160)); }
@@ -197,8 +198,9 @@ CheckResult run_quadratic(const CheckContext& ctx, bool broken) {
   const double med = quantile(orders, 0.5), p10 = quantile(orders, 0.1);
   double max_ratio = 0;
   for (double q : ratios) max_ratio = std::max(max_ratio, q);
-  const bool ok = orders.size() >= 10 && med >= kOrderLow && med <= kOrderHigh && p10 >= kOrderMinP10 &&
-                  converged >= kMinConvergedFraction * static_cast<double>(walks);
+  // The order is measured on every walk's full steps (converged or not); how many converge at
+  // this delta is differential.hslt.walk.statistics' business.
+  const bool ok = orders.size() >= 10 && med >= kOrderLow && med <= kOrderHigh && p10 >= kOrderMinP10;
   CheckResult r;
   r.passed = broken ? (!ok && walks > 0) : ok;
   r.statistic_name = "median order";
@@ -312,7 +314,7 @@ CheckResult run_first_order(const CheckContext& ctx, bool broken) {
       std::vector<double> ld, le;
       bool ok = true;
       for (int m = 0; m < 8 && ok; ++m) {
-        const double delta = 1e-2 * std::ldexp(1.0, -m);
+        const double delta = kFirstOrderDelta0 * std::ldexp(1.0, -m);
         const HsltWalkResult r = hslt_walk(scene, x, h0 + delta * dir, opt);
         if (r.status != HsltWalkStatus::kConverged) {
           ok = false;
@@ -344,6 +346,12 @@ CheckResult run_first_order(const CheckContext& ctx, bool broken) {
         continue;
       }
       if (ld.size() < 3) continue;  // locally linear: no slope
+      // The asymptotic regime: the least-squares slope over the (up to) 5 smallest delta (on
+      // strongly curved chains the third-order term still bends the first points).
+      if (ld.size() > 5) {
+        ld.erase(ld.begin(), ld.end() - 5);
+        le.erase(le.begin(), le.end() - 5);
+      }
       const double s = least_squares_slope(ld, le);
       slopes.push_back(s);
       ++f_checked;
@@ -369,7 +377,7 @@ CheckResult run_first_order(const CheckContext& ctx, bool broken) {
   r.statistic = worst_dev;
   r.samples = checked;
   r.message = fmt::format(
-      "{}{} paths, delta = 1e-2 .. 7.8e-5 (8 halvings): max_i |x'_i - x_i - (dp/du, dp/dv) J^-1 delta| has "
+      "{}{} paths, delta = 2e-3 .. 1.6e-5 (8 steps, slope over the 5 smallest): max_i |x'_i - x_i - (dp/du, dp/dv) J^-1 delta| has "
       "log-log slope 2 +- {:g}: {} checked, {} failed, worst |slope - 2| {:.3g}, median slope {:.3f}; {} walks "
       "of a sweep not converged",
       broken ? (r.passed ? "sign-flipped J^-1 caught: " : "sign-flipped J^-1 NOT caught: ") : "", paths,
@@ -498,7 +506,7 @@ struct HsltWalkChecks {
              }});
     reg.add({.name = "differential.hslt.walk.first_order",
              .description = "X' - X = (dp/du, dp/dv) J^-1 delta + O(delta^2): log-log slope of the error over delta "
-                            "1e-2 .. 7.8e-5 is 2 +- 0.1 on every path",
+                            "2e-3 .. 1.6e-5 (least squares over the 5 smallest) is 2 +- 0.1 on every path",
              .kind = CheckKind::kDeterministic,
              .run = [](const CheckContext& ctx) { return run_first_order(ctx, false); }});
     reg.add({.name = "differential.hslt.walk.first_order.sign_error.negative_control",
