@@ -231,6 +231,7 @@ CheckResult run_quadratic(const CheckContext& ctx, bool broken) {
 
 struct ReversibleCount {
   int64_t forward = 0, converged = 0, reversible = 0;
+  int64_t back_failed = 0, back_elsewhere = 0;  // non-reversible: the way back fails / ends at another path
   double worst_distance = 0;  // over converged forward walks whose back walk converged
 };
 
@@ -249,10 +250,14 @@ CheckResult run_reversible(const CheckContext& ctx, const WalkFn& walk, bool bro
         if (f.status != HsltWalkStatus::kConverged) continue;
         ++c.converged;
         const HsltWalkResult b = walk(scene, f.path, hslt_constraints(x), opt);
-        if (b.status != HsltWalkStatus::kConverged) continue;
+        if (b.status != HsltWalkStatus::kConverged) {
+          ++c.back_failed;
+          continue;
+        }
         const double d = hslt_max_vertex_distance(b.path, x);
         c.worst_distance = std::max(c.worst_distance, d);
         if (d < kReversibleTolerance) ++c.reversible;
+        else ++c.back_elsewhere;
       }
     }
   }
@@ -261,8 +266,11 @@ CheckResult run_reversible(const CheckContext& ctx, const WalkFn& walk, bool bro
   for (const auto& [delta, c] : by_delta) {
     const double frac = c.converged > 0 ? static_cast<double>(c.reversible) / static_cast<double>(c.converged) : 0.0;
     sweep.push_back({{"delta", delta}, {"walks", c.forward}, {"converged", c.converged}, {"reversible", c.reversible},
-                     {"reversible_fraction_of_converged", frac}, {"worst_distance", c.worst_distance}});
+                     {"reversible_fraction_of_converged", frac}, {"worst_distance", c.worst_distance},
+                     {"back_walk_failed", c.back_failed}, {"back_walk_reached_another_path", c.back_elsewhere}});
     table += fmt::format("{}delta {:g}: {}/{} reversible", table.empty() ? "" : "; ", delta, c.reversible, c.converged);
+    if (c.back_failed + c.back_elsewhere > 0)
+      table += fmt::format(" (back walk failed {}, reached another path {})", c.back_failed, c.back_elsewhere);
   }
   const ReversibleCount& small = by_delta[kSmallDelta];
   const double frac = small.converged > 0 ? static_cast<double>(small.reversible) / static_cast<double>(small.converged) : 0.0;
