@@ -177,8 +177,9 @@ HsltWalkResult hslt_walk(const HsltPath& start, const Eigen::VectorXd& target, c
   res.path = start;
   const int k = start.segments();
   Eigen::VectorXd F;
-  double r = path_residual(start, target, &F);
-  if (!std::isfinite(r) || target.size() != F.size()) {
+  const bool sized = target.size() == 2 * static_cast<Eigen::Index>(std::max(0, start.interior_count()));
+  double r = sized ? path_residual(start, target, &F) : kHuge;
+  if (!std::isfinite(r) || !sized) {
     res.status = HsltWalkStatus::kDiverged;
     res.residual = kHuge;
     res.residuals.push_back(kHuge);

@@ -132,6 +132,10 @@ TEST(HsltWalk, FailuresAreReportedWithoutNaN) {
   const HsltWalkResult d = hslt_walk(scene, x, bad, opt);
   EXPECT_EQ(d.status, HsltWalkStatus::kDiverged);
   EXPECT_TRUE(std::isfinite(d.residual));
+  // A target of the wrong size.
+  const HsltWalkResult w = hslt_walk(scene, x, Eigen::VectorXd::Zero(target.size() + 2), opt);
+  EXPECT_EQ(w.status, HsltWalkStatus::kDiverged);
+  EXPECT_TRUE(std::isfinite(w.residual));
   // An unreachable target (|h*| > 1 cannot be a projected unit vector): no convergence, no NaN.
   const Eigen::VectorXd far = Eigen::VectorXd::Constant(target.size(), 2.0);
   const HsltWalkResult f = hslt_walk(scene, x, far, opt);
