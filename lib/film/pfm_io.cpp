@@ -153,4 +153,28 @@ PfmImage decode_pfm(const std::string& bytes, const std::string& name) {
 
 PfmImage read_pfm(const std::string& path) { return decode_pfm(read_file(path), path); }
 
+WelchImage welch_from_reference(int width, int height, const std::vector<Rgb>& mean,
+                                const std::vector<Rgb>& variance_of_mean, int64_t effective_count) {
+  if (width < 1 || height < 1) throw std::invalid_argument("reference: width and height must be positive");
+  const size_t n = size_t(width) * size_t(height);
+  if (mean.size() != n || variance_of_mean.size() != n)
+    throw std::invalid_argument(fmt::format("reference: {} x {} pixels expected, the mean has {}, the variance {}",
+                                            width, height, mean.size(), variance_of_mean.size()));
+  if (effective_count < 2) throw std::invalid_argument("reference: the effective sample count must be at least 2");
+  WelchImage w(width, height);
+  for (size_t i = 0; i < n; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      const int x = int(i % size_t(width)), y = int(i / size_t(width));
+      if (!std::isfinite(mean[i][c]))
+        throw std::invalid_argument(fmt::format("reference mean: pixel ({}, {}) channel {} is not finite", x, y, c));
+      if (!std::isfinite(variance_of_mean[i][c]) || variance_of_mean[i][c] < 0)
+        throw std::invalid_argument(fmt::format("reference variance: pixel ({}, {}) channel {} = {} is not a finite "
+                                                "non-negative number",
+                                                x, y, c, variance_of_mean[i][c]));
+    }
+    w.set_from_moments(i, mean[i], variance_of_mean[i] * double(effective_count), effective_count);
+  }
+  return w;
+}
+
 }  // namespace tb

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "lib/core/spectrum.h"
+#include "lib/film/welch_image.h"
 
 namespace tb {
 
@@ -37,5 +38,18 @@ std::string encode_pfm(const PfmImage& image, PfmByteOrder order = PfmByteOrder:
 PfmImage read_pfm(const std::string& path);
 // From bytes; `name` is shown in errors.
 PfmImage decode_pfm(const std::string& bytes, const std::string& name = "<pfm>");
+
+// A reference given as a mean image and a per-pixel variance of that mean (the squared standard
+// error, as renderers that estimate their own error write it; not the variance of the samples),
+// as Welch statistics for compare_welch_images: each pixel holds `effective_count` Welch samples
+// whose sample variance is variance_of_mean * effective_count, so that the t-test's standard
+// error term var / count is the given variance of the mean. The count only sets the reference's
+// share of the Welch-Satterthwaite degrees of freedom: at 10^6 it is negligible, i.e. the
+// reference variance is treated as known. Sizes must match; a negative or non-finite value is a
+// std::invalid_argument naming the pixel (row 0 at the top) and channel.
+constexpr int64_t kReferenceEffectiveCount = 1000000;
+WelchImage welch_from_reference(int width, int height, const std::vector<Rgb>& mean,
+                                const std::vector<Rgb>& variance_of_mean,
+                                int64_t effective_count = kReferenceEffectiveCount);
 
 }  // namespace tb

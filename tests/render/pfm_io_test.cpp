@@ -1,13 +1,19 @@
 // Portable Float Map input and output (lib/film/pfm_io.h): round trips in both byte orders and
 // both channel counts, the stored row order (bottom row first) and byte order checked on the raw
 // bytes, hand-written files of other writers, and every malformed header or size an error.
+// The reference form (welch_from_reference: a mean and a variance-of-the-mean image): the t
+// statistic it gives, and a statistical check on synthetic Gaussian images (alpha = 0.01, fixed
+// seed) with two negative controls that must be rejected: a 2% scaled reference mean, and the
+// same noisy reference with its variance left out.
 #include <gtest/gtest.h>
 
 #include <cstring>
 #include <filesystem>
 
 #include "lib/core/atomic_file.h"
+#include "lib/core/rng.h"
 #include "lib/film/pfm_io.h"
+#include "validate/image_compare.h"
 
 namespace tb {
 namespace {
@@ -119,6 +125,80 @@ TEST(PfmIo, MalformedFilesAreErrorsSayingWhat) {
   PfmImage inf = ramp(1, 1);
   inf.rgb[0].g = 1e300;  // not representable as float
   EXPECT_THROW(encode_pfm(inf), std::runtime_error);
+}
+
+double gaussian(Rng& r) {
+  const double u1 = 1.0 - r.uniform(), u2 = r.uniform();
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
+}
+
+TEST(PfmReference, TheTStatisticUsesTheGivenVarianceOfTheMean) {
+  WelchImage a(1, 1);
+  for (double v : {1.0, 2.0, 4.0, 3.0, 0.5, 2.5, 1.5, 3.5}) a.add(0, Rgb(v, 2.0 * v, v + 1.0));
+  const double mean_a = 18.0 / 8.0;
+  double ss = 0;
+  for (double v : {1.0, 2.0, 4.0, 3.0, 0.5, 2.5, 1.5, 3.5}) ss += (v - mean_a) * (v - mean_a);
+  const double var_a = ss / 7.0;
+  const double m = 1.7, vm = 0.03;  // reference mean and variance of the mean, channel R
+  const WelchImage ref = welch_from_reference(1, 1, {Rgb(m, 2.0 * m, m + 1.0)}, {Rgb(vm, 4.0 * vm, vm)});
+  EXPECT_EQ(ref.count[0], kReferenceEffectiveCount);
+  EXPECT_NEAR(ref.variance(0).r / double(ref.count[0]), vm, 1e-12);
+  EXPECT_NEAR(ref.mean(0).g, 2.0 * m, 1e-12);
+  const ImageCompareResult r = compare_welch_images(a, ref, 0.01);
+  const double t = (mean_a - m) / std::sqrt(var_a / 8.0 + vm);  // the same in every channel
+  EXPECT_NEAR(r.worst.t, t, 1e-6 * std::abs(t));
+  // Welch-Satterthwaite: the reference's share is negligible at 10^6, the dof is A's 7 inflated
+  // by the known reference variance.
+  const double sa = var_a / 8.0;
+  const double dof = (sa + vm) * (sa + vm) / (sa * sa / 7.0 + vm * vm / double(kReferenceEffectiveCount - 1));
+  EXPECT_NEAR(r.worst.dof, dof, 1e-6 * dof);
+}
+
+TEST(PfmReference, NoisyReferenceWithItsVarianceIsConsistentAndBiasesAreRejected) {
+  constexpr int kW = 32, kH = 32, kN = 16;
+  constexpr double kAlpha = 0.01;
+  Rng rng(20261202);
+  WelchImage a(kW, kH);
+  std::vector<Rgb> ref_mean(kW * kH), ref_var(kW * kH), truth(kW * kH);
+  for (size_t i = 0; i < truth.size(); ++i) {
+    truth[i] = Rgb(1.0 + 0.01 * double(i % 97), 0.5 + 0.002 * double(i % 31), 2.0);
+    const double sigma_a = 0.3 * truth[i].r;  // per Welch sample of A
+    for (int k = 0; k < kN; ++k)
+      a.add(i, truth[i] + sigma_a * Rgb(gaussian(rng), gaussian(rng), gaussian(rng)));
+    // The reference's own error, 2x A's standard error: not negligible.
+    const double sd_ref = 2.0 * sigma_a / std::sqrt(double(kN));
+    ref_var[i] = Rgb(sd_ref * sd_ref);
+    ref_mean[i] = truth[i] + sd_ref * Rgb(gaussian(rng), gaussian(rng), gaussian(rng));
+  }
+  const ImageCompareResult same = compare_welch_images(a, welch_from_reference(kW, kH, ref_mean, ref_var), kAlpha);
+  EXPECT_FALSE(same.rejects()) << same.message();
+  std::vector<Rgb> scaled = ref_mean;
+  for (Rgb& v : scaled) v *= 1.02;
+  const ImageCompareResult biased = compare_welch_images(a, welch_from_reference(kW, kH, scaled, ref_var), kAlpha);
+  EXPECT_TRUE(biased.rejects()) << biased.message();
+  const std::vector<Rgb> zero(kW * kH, Rgb(0.0));
+  const ImageCompareResult no_var = compare_welch_images(a, welch_from_reference(kW, kH, ref_mean, zero), kAlpha);
+  EXPECT_TRUE(no_var.rejects()) << no_var.message();
+  std::cout << "reference with variance: p = " << same.p_value() << "; mean x 1.02: p = " << biased.p_value()
+            << "; variance left out: p = " << no_var.p_value() << "\n";
+}
+
+TEST(PfmReference, BadReferencesAreErrors) {
+  const std::vector<Rgb> one(4, Rgb(1.0));
+  std::vector<Rgb> neg = one;
+  neg[3].b = -1e-3;
+  try {
+    welch_from_reference(2, 2, one, neg);
+    ADD_FAILURE() << "negative variance accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("reference variance: pixel (1, 1) channel 2"), std::string::npos) << e.what();
+  }
+  std::vector<Rgb> nan = one;
+  nan[1].g = std::nan("");
+  EXPECT_THROW(welch_from_reference(2, 2, nan, one), std::invalid_argument);
+  EXPECT_THROW(welch_from_reference(2, 2, one, nan), std::invalid_argument);
+  EXPECT_THROW(welch_from_reference(2, 2, one, std::vector<Rgb>(3, Rgb(0.0))), std::invalid_argument);
+  EXPECT_THROW(welch_from_reference(2, 2, one, one, 1), std::invalid_argument);
 }
 
 }  // namespace
