@@ -4,8 +4,9 @@
 //  - the same world: shape count, per-shape bounding boxes and facing, emitter power, camera
 //    rays at several raster positions, all to 1e-9; max_depth = max_bounces - 1;
 //  - the same image: Welch comparison (validate/image_compare.h, alpha = 0.01 for the whole
-//    comparison) of path-traced 24 x 24 renders of each, fixed seeds; negative control: the
-//    import with the left wall's red albedo raised by 5% must be rejected at the same alpha;
+//    comparison) of path-traced 24 x 24 renders of each (16 passes of 32 spp), fixed seeds;
+//    negative control: the import with the left wall's red albedo raised by 5% must be
+//    rejected at the same alpha;
 //  - every element outside the supported subset is an error naming its path, its line and what
 //    is unsupported.
 #include <gtest/gtest.h>
@@ -124,7 +125,7 @@ TEST(TungstenImport, CornellBoxIsTheSameWorldAsItsHandConversion) {
 WelchImage render_pt(const World& w, uint64_t seed) {
   RenderSettings st;
   st.seed = seed;
-  st.spp = 16 * 48;
+  st.spp = 16 * 32;
   st.passes = 16;
   st.max_depth = w.integrator_defaults().at("max_depth").get<int>();
   Film film(w.camera().width(), w.camera().height());
