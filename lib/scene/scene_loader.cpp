@@ -230,7 +230,8 @@ std::unique_ptr<World> load(std::shared_ptr<const JsonDocument> doc, const std::
   // first (lib/scene/tungsten_import.h); the translation reports what it cannot map.
   if (is_tungsten_scene(doc->root)) {
     const nlohmann::json converted = tungsten_to_scene_json(*doc);
-    return load(JsonDocument::parse(converted.dump(1), doc->file + " (imported from Tungsten)"), base_dir);
+    // Errors past the import (none expected: it checks what it writes) name the converted text.
+    return load(JsonDocument::parse(converted.dump(1), doc->file + " (converted from Tungsten)"), base_dir);
   }
   const StrictObject root = StrictObject::root(doc);
   WorldBuilder b;

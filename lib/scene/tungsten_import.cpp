@@ -303,7 +303,7 @@ json tungsten_to_scene_json(const JsonDocument& doc) {
   } else {
     res.fail("expected an integer or [width, height]");
   }
-  if (w < 1 || h < 1) res.fail("width and height must be positive");
+  if (w < 1 || h < 1 || w > 16384 || h > 16384) res.fail("width and height must lie in [1, 16384]");
   const Node fov = cam.require("fov", "the horizontal field of view in degrees");
   const double hfov = fov.number();
   if (!(hfov > 0 && hfov < 180)) fov.fail("the field of view must lie in (0, 180) degrees");
@@ -312,10 +312,20 @@ json tungsten_to_scene_json(const JsonDocument& doc) {
       2.0 * std::atan(std::tan(0.5 * hfov * kPi / 180.0) * double(h) / double(w)) * 180.0 / kPi;
   const Node ct = cam.require("transform", "the camera placement");
   ct.only({"position", "look_at", "up"}, "camera transform");
+  const auto eye = ct.require("position", "the eye").vec3("position");
+  const auto target = ct.require("look_at", "the target").vec3("look_at");
+  const auto up = ct.has("up") ? ct.at("up").vec3("up") : std::array<double, 3>{0, 1, 0};
+  const double d[3] = {target[0] - eye[0], target[1] - eye[1], target[2] - eye[2]};
+  const double dl = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  const double ul = std::sqrt(up[0] * up[0] + up[1] * up[1] + up[2] * up[2]);
+  if (!(dl > 0)) ct.at("look_at").fail("look_at equals position: no viewing direction");
+  const double cr[3] = {d[1] * up[2] - d[2] * up[1], d[2] * up[0] - d[0] * up[2], d[0] * up[1] - d[1] * up[0]};
+  if (!(std::sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]) > 1e-9 * dl * ul))
+    (ct.has("up") ? ct.at("up") : ct).fail("up is zero or parallel to the viewing direction");
   json camera = {{"type", "pinhole"},
-                 {"position", rgb_json(ct.require("position", "the eye").vec3("position"))},
-                 {"look_at", rgb_json(ct.require("look_at", "the target").vec3("look_at"))},
-                 {"up", rgb_json(ct.has("up") ? ct.at("up").vec3("up") : std::array<double, 3>{0, 1, 0})},
+                 {"position", rgb_json(eye)},
+                 {"look_at", rgb_json(target)},
+                 {"up", rgb_json(up)},
                  {"fov", vfov},
                  {"resolution", json::array({w, h})}};
   out["camera"] = camera;

@@ -300,6 +300,21 @@ TEST(TungstenImport, UnsupportedElementsAreErrorsNamingPathLineAndWhat) {
   }
   {
     auto j = base;
+    j["camera"]["transform"]["look_at"] = {0, 1, 6.8};
+    expect_error(j, "camera.transform.look_at = [0,1,6.8]", "look_at equals position", "/camera/transform/look_at");
+  }
+  {
+    auto j = base;
+    j["camera"]["transform"]["up"] = {0, 0, -2};
+    expect_error(j, "camera.transform.up = [0,0,-2]", "parallel to the viewing direction", "/camera/transform/up");
+  }
+  {
+    auto j = base;
+    j["camera"]["resolution"] = {0, 256};
+    expect_error(j, "camera.resolution = [0,256]", "must lie in [1, 16384]", "/camera/resolution");
+  }
+  {
+    auto j = base;
     j["skybox"] = {{"type", "constant"}};
     expect_error(j, "skybox", "is not supported by the Tungsten import", "/skybox");
   }
