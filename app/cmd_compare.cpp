@@ -8,31 +8,76 @@
 #include "lib/core/atomic_file.h"
 #include "app/compare_metrics.h"
 #include "lib/film/exr_io.h"
+#include "lib/film/pfm_io.h"
 #include "validate/image_compare.h"
 
 namespace tb {
 
 namespace {
 
-bool is_exr(const std::string& path) {
+std::string extension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext == ".exr";
+  return ext;
+}
+bool is_exr(const std::string& path) { return extension(path) == ".exr"; }
+bool is_pfm(const std::string& path) { return extension(path) == ".pfm"; }
+bool is_image(const std::string& path) { return is_exr(path) || is_pfm(path); }
+
+// A PFM holds a mean only: one exact Welch sample per pixel (variance 0), like an EXR without
+// variance/count channels.
+WelchImage welch_from_pfm(const PfmImage& p) {
+  WelchImage w(p.width, p.height);
+  for (size_t i = 0; i < p.rgb.size(); ++i) w.add(i, p.rgb[i]);
+  return w;
 }
 
 WelchImage load_welch(const std::string& path) {
+  if (is_pfm(path)) {
+    fmt::print(stderr, "tb compare: warning: {} is a PFM (a mean only); treated as an exact reference\n", path);
+    return welch_from_pfm(read_pfm(path));
+  }
   const ExrImage e = read_exr(path);
   if (!e.variance || !e.count)
     fmt::print(stderr, "tb compare: warning: {} has no variance/count channels; treated as an exact reference\n", path);
   return welch_from_exr_image(e);
 }
 
+// The RGB of a .pfm or .exr (row 0 at the top).
+PfmImage load_rgb(const std::string& path) {
+  if (is_pfm(path)) return read_pfm(path);
+  const ExrImage e = read_exr(path);
+  PfmImage p;
+  p.width = e.width;
+  p.height = e.height;
+  p.rgb = e.rgb;
+  return p;
+}
+
+WelchImage load_reference(const std::string& mean_path, const std::string& variance_path) {
+  const PfmImage m = load_rgb(mean_path), v = load_rgb(variance_path);
+  if (m.width != v.width || m.height != v.height)
+    throw std::invalid_argument(fmt::format("--reference-mean {} is {} x {}, --reference-variance {} is {} x {}",
+                                            mean_path, m.width, m.height, variance_path, v.width, v.height));
+  return welch_from_reference(m.width, m.height, m.rgb, v.rgb);
+}
+
 int compare_images(const CompareArgs& a) {
-  const WelchImage img_a = load_welch(a.inputs[0]), img_b = load_welch(a.inputs[1]);
+  const bool reference_form = !a.reference_mean.empty();
+  const WelchImage img_a = load_welch(a.inputs[0]);
+  const WelchImage img_b = reference_form ? load_reference(a.reference_mean, a.reference_variance)
+                                          : load_welch(a.inputs[1]);
+  if (img_a.width != img_b.width || img_a.height != img_b.height)
+    throw std::invalid_argument(fmt::format("A is {} x {}, B is {} x {}", img_a.width, img_a.height, img_b.width,
+                                            img_b.height));
   ImageCompareOptions opt;
   opt.skew_correction = a.skew_correction;
   const ImageCompareResult r = compare_welch_images(img_a, img_b, a.alpha, opt);
-  fmt::print("A: {}\nB: {}\n", a.inputs[0], a.inputs[1]);
+  const std::string b_name =
+      reference_form ? fmt::format("reference mean {}, variance of the mean {} (effective count {})", a.reference_mean,
+                                   a.reference_variance, kReferenceEffectiveCount)
+                     : a.inputs[1];
+  fmt::print("A: {}\nB: {}\n", a.inputs[0], b_name);
   fmt::print("alpha {:g} (each of 3 tests {:.3g}, per pixel-channel {:.3g}); {} pixel-channels tested, {} identical "
              "skipped\n",
              r.alpha, r.alpha_each, r.alpha_pixel, r.tested, r.skipped_identical);
@@ -43,7 +88,7 @@ int compare_images(const CompareArgs& a) {
   else if (opt.skew_correction)
     fmt::print("  t not skew-corrected: {} has no moment3 channels (written by tb render since the skew "
                "correction); heavy-tailed pixels may then reject consistent means\n",
-               img_a.has_third_moment() ? a.inputs[1] : a.inputs[0]);
+               img_a.has_third_moment() ? b_name : a.inputs[0]);
   fmt::print("  pixel-wise (Sidak over pixel-channels): p = {:.4g}{}\n", r.p_pixel_family,
              r.rejects_pixel() ? "  REJECTS" : "");
   static const char* kChannel[] = {"R", "G", "B"};
@@ -91,7 +136,10 @@ int compare_images(const CompareArgs& a) {
   if (!a.json_out.empty()) {
     nlohmann::json j = r.details();
     j["a"] = a.inputs[0];
-    j["b"] = a.inputs[1];
+    j["b"] = reference_form ? nlohmann::json{{"reference_mean", a.reference_mean},
+                                             {"reference_variance", a.reference_variance},
+                                             {"effective_count", kReferenceEffectiveCount}}
+                            : nlohmann::json(a.inputs[1]);
     j["rejects"] = r.rejects();
     write_file_atomic(a.json_out, j.dump(1));
   }
@@ -105,13 +153,30 @@ int cmd_compare(const CompareArgs& a, const std::atomic<bool>* interrupted) {
     for (const auto& o : given) fmt::print(stderr, "tb compare: {} does not apply to the {} form\n", o, form);
     return given.empty();
   };
-  if (a.inputs.size() == 1 && !is_exr(a.inputs[0])) {
+  if (!a.reference_mean.empty() || !a.reference_variance.empty()) {
+    if (a.reference_mean.empty() || a.reference_variance.empty()) {
+      fmt::print(stderr, "tb compare: --reference-mean and --reference-variance go together\n");
+      return 2;
+    }
+    if (a.inputs.size() != 1 || !is_image(a.inputs[0])) {
+      fmt::print(stderr, "tb compare: the reference form takes one image: tb compare A.exr --reference-mean R.pfm "
+                         "--reference-variance V.pfm\n");
+      return 2;
+    }
+    if (!reject_options(a.scene_options_given, "reference (A.exr --reference-mean R --reference-variance V)")) return 2;
+    if (!(a.alpha > 0 && a.alpha < 1)) {
+      fmt::print(stderr, "tb compare: --alpha must lie in (0, 1)\n");
+      return 2;
+    }
+    return compare_images(a);
+  }
+  if (a.inputs.size() == 1 && !is_image(a.inputs[0])) {
     if (!reject_options(a.image_options_given, "scene")) return 2;
     CompareSceneArgs s = a.scene;
     s.scene = a.inputs[0];
     return cmd_compare_scene(s, interrupted);
   }
-  if (a.inputs.size() == 2 && is_exr(a.inputs[0]) && is_exr(a.inputs[1])) {
+  if (a.inputs.size() == 2 && is_image(a.inputs[0]) && is_image(a.inputs[1])) {
     if (!reject_options(a.scene_options_given, "image (A.exr B.exr)")) return 2;
     if (!(a.alpha > 0 && a.alpha < 1)) {
       fmt::print(stderr, "tb compare: --alpha must lie in (0, 1)\n");
@@ -120,7 +185,8 @@ int cmd_compare(const CompareArgs& a, const std::atomic<bool>* interrupted) {
     return compare_images(a);
   }
   fmt::print(stderr,
-             "tb compare: expected two EXR images (tb compare A.exr B.exr [--alpha A]) or one scene file "
+             "tb compare: expected two images (tb compare A.exr B.exr [--alpha A]; .exr or .pfm), one image with a "
+             "reference (tb compare A.exr --reference-mean R.pfm --reference-variance V.pfm) or one scene file "
              "(tb compare SCENE --integrators A,B,... --time S [--reference REF.exr])\n");
   return 2;
 }

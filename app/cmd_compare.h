@@ -1,5 +1,6 @@
 // tb compare: statistical comparison of renders, and equal-time comparison of integrators.
-//   tb compare A.exr B.exr [--alpha 0.01] [--json R.json]
+//   tb compare A.exr B.exr [--alpha 0.01] [--json R.json]     (.pfm inputs: exact references)
+//   tb compare A.exr --reference-mean R.pfm --reference-variance V.pfm [--alpha] [--json]
 //   tb compare SCENE --integrators A,B,... --time S [--reference REF.exr] [-o DIR] ...
 // Image form:
 // reads two EXRs written by tb render (mean, variance.R/G/B and count channels: the Welch
@@ -24,6 +25,10 @@ struct CompareArgs {
   double alpha = 0.01;
   std::string json_out;             // optional: the full result as JSON
   bool skew_correction = false;     // Hall's transformation of t where moment3 is stored (experimental)
+  // Reference form (tb compare A.exr --reference-mean R.pfm --reference-variance V.pfm): the
+  // reference as a mean image and a per-pixel variance of that mean (lib/film/pfm_io.h,
+  // welch_from_reference; docs/integrator.md).
+  std::string reference_mean, reference_variance;
   CompareSceneArgs scene;           // the scene form's options (scene.scene is set from inputs)
   // Names of the options given on the command line that belong to one form only, so that using
   // them with the other form is reported instead of ignored.

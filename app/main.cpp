@@ -205,9 +205,16 @@ int main(int argc, char** argv) {
       "Compare two renders statistically (A.exr B.exr: per-pixel Welch t-test, Stouffer, sum z^2; exit 1 if they "
       "differ), or integrators at equal time on a scene (SCENE --integrators A,B --time S: rRMSE against time, "
       "fitted rates, efficiency, HTML report; docs/compare.md)");
-  compare->add_option("inputs", cmpa.inputs, "A.exr B.exr (EXRs written by tb render), or one scene file")
+  compare->add_option("inputs", cmpa.inputs,
+                      "A.exr B.exr (EXRs written by tb render; .pfm images are exact references), A.exr with "
+                      "--reference-mean/--reference-variance, or one scene file")
       ->required()->expected(1, 2);
-  const std::vector<std::string> compare_image_opts = {"--alpha", "--json", "--skew-correction"};
+  const std::vector<std::string> compare_image_opts = {"--alpha", "--json", "--reference-mean", "--reference-variance",
+                                                       "--skew-correction"};
+  compare->add_option("--reference-mean", cmpa.reference_mean,
+                      "A.exr: the reference's mean image (.pfm or .exr), compared with A instead of B");
+  compare->add_option("--reference-variance", cmpa.reference_variance,
+                      "A.exr: the per-pixel variance of the reference's mean (.pfm or .exr; squared standard error)");
   compare->add_option("--alpha", cmpa.alpha, "A.exr B.exr: significance level of the whole comparison")
       ->capture_default_str();
   compare->add_option("--json", cmpa.json_out, "A.exr B.exr: write the full result to this JSON file");

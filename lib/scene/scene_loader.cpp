@@ -15,6 +15,7 @@
 #include "lib/light/infinite_lights.h"
 #include "lib/light/point_light.h"
 #include "lib/material/bsdf_registry.h"
+#include "lib/scene/tungsten_import.h"
 
 namespace tb {
 
@@ -225,6 +226,13 @@ void parse_light(const StrictObject& l, WorldBuilder& b) {
 }
 
 std::unique_ptr<World> load(std::shared_ptr<const JsonDocument> doc, const std::string& base_dir) {
+  // A Tungsten scene (top-level primitives / bsdfs / renderer) is translated into this format
+  // first (lib/scene/tungsten_import.h); the translation reports what it cannot map.
+  if (is_tungsten_scene(doc->root)) {
+    const nlohmann::json converted = tungsten_to_scene_json(*doc);
+    // Errors past the import (none expected: it checks what it writes) name the converted text.
+    return load(JsonDocument::parse(converted.dump(1), doc->file + " (converted from Tungsten)"), base_dir);
+  }
   const StrictObject root = StrictObject::root(doc);
   WorldBuilder b;
   parse_camera(root.object("camera"), b);

@@ -1,6 +1,7 @@
 // The JSON scene format (docs/scene.md). Strict: an unknown key, a wrong type, a missing field,
 // a non-finite number or degenerate geometry is a JsonError naming the file, the line and the
-// JSON pointer of the offending value; a missing mesh file names its path.
+// JSON pointer of the offending value; a missing mesh file names its path. A scene file of the
+// Tungsten renderer is recognised by its keys and imported (lib/scene/tungsten_import.h).
 #pragma once
 
 #include <memory>
