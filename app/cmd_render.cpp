@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -14,6 +15,7 @@
 #include "lib/core/parallel.h"
 #include "lib/film/exr_io.h"
 #include "lib/film/png_preview.h"
+#include "lib/mcmc/path_space/ramlt.h"
 #include "lib/registry/integrator_registry.h"
 #include "lib/scene/scene_loader.h"
 
@@ -29,6 +31,11 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     std::string names;
     for (const auto& i : integrators()) names += (names.empty() ? "" : ", ") + i.name;
     fmt::print(stderr, "tb render: unknown integrator '{}' (known: {})\n", a.integrator, names);
+    return 2;
+  }
+  const bool ramlt = a.integrator.rfind("ramlt-", 0) == 0;
+  if (!a.partition.empty() && !ramlt) {
+    fmt::print(stderr, "tb render: --partition applies to the ramlt-* integrators only\n");
     return 2;
   }
   const auto t_load = std::chrono::steady_clock::now();
@@ -63,7 +70,22 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   ThreadLimit limit(static_cast<size_t>(std::max(0, a.threads)));
   Film film(world->camera().width(), world->camera().height());
   const auto t0 = std::chrono::steady_clock::now();
-  const int64_t passes = integ->render(*world, st, film);
+  // ramlt-*: the driver directly, for the partition option and the per-region maps.
+  std::optional<path_space::RamltRegionMaps> ramlt_maps;
+  int64_t passes = 0;
+  if (ramlt) {
+    path_space::RamltOptions ro;
+    if (a.integrator == "ramlt-multichain") ro.perturbation = path_space::RamltPerturbation::kMultiChain;
+    if (!a.partition.empty()) ro.partition = a.partition;
+    const path_space::RamltStats rs = path_space::run_ramlt(*world, st, film, ro);
+    for (const auto& m : rs.mlt.mutations) report.mutations.push_back({m.name, m.proposed, m.accepted, m.errors});
+    report.mutations_total = rs.mlt.mutations_total;
+    report.mutations_per_second = rs.mlt.mutations_per_second();
+    ramlt_maps = rs.maps;
+    passes = rs.mlt.chains;
+  } else {
+    passes = integ->render(*world, st, film);
+  }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   line.finish();
 
@@ -92,6 +114,12 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     rec["mutations"] = m;
     rec["mutations_total"] = report.mutations_total;
     rec["mutations_per_second"] = report.mutations_per_second;
+  }
+  if (ramlt_maps) {
+    const std::string base = std::filesystem::path(a.out).replace_extension("").string();
+    path_space::write_ramlt_maps(*ramlt_maps, base);
+    rec["ramlt_maps"] = base + ".ramlt.json";
+    rec["partition"] = ramlt_maps->partition;
   }
   write_file_atomic(std::filesystem::path(a.out).replace_extension(".json").string(), rec.dump(1));
   fmt::print("{}: {}x{}, {} passes, {} spp in {:.2f} s ({:.3g} samples/s); {} non-finite samples rejected\n", a.out,

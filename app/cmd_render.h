@@ -20,6 +20,7 @@ struct RenderArgs {
   std::string resolution;   // "WxH": overrides the camera resolution of the scene file
   bool no_progress = false;
   bool list = false;
+  std::string partition;    // ramlt-*: fixed | global | grid (default grid)
 };
 
 int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted);

@@ -194,6 +194,8 @@ int main(int argc, char** argv) {
   render->add_option("--threads", rargs.threads, "Worker threads (0: all cores)");
   render->add_option("-o,--out", rargs.out, "Output EXR path")->capture_default_str();
   render->add_option("--resolution", rargs.resolution, "WxH: override the scene camera's resolution");
+  render->add_option("--partition", rargs.partition,
+                     "ramlt-lens / ramlt-multichain: region partition of the adaptation (fixed, global, grid; default grid)");
   render->add_flag("--list", rargs.list, "List the integrators and exit");
   render->add_flag("--no-progress", rargs.no_progress, "No progress line on stderr");
 
