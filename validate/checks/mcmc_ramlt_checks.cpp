@@ -1,0 +1,305 @@
+// Checks of regional adaptive MLT (Otsu et al., "Regional Adaptive Metropolis Light Transport";
+// lib/mcmc/path_space/ramlt_*.h, docs/ramlt.md):
+//  - mcmc.ramlt.{lens,multichain}.pairwise: pi(x) T(x->y) a(x->y) = pi(y) T(y->x) a(y->x) to 1e-9
+//    relative on seeded path pairs at FROZEN per-region lambda (an 8 x 8 (lens) or 64 x 64 (multi-chain: quarter-pixel cells) screen grid on the 16 x 16
+//    image, lambda_k spread over [-9, -5] so that neighbouring regions differ), the acceptance from
+//    the stated T (sigma of x's region forward, of y's region reverse, Otsu Eq. 2-3) and the flux
+//    from the unbroken perturbation's density; the fraction of pairs whose y lies in another region
+//    than x is measured and must be >= 20% (deterministic);
+//  - mcmc.ramlt.direction.chi2: the truncated-normal direction kernel (Otsu Sec. 3) sampled around
+//    a fixed direction against its stated density per solid angle times sin(theta), on (theta, phi),
+//    at sigma = 0.02, 0.3, 2.5; alpha = 1e-5, Šidák over the three;
+//  - mcmc.ramlt.lens.image.cornell: run_ramlt (ramlt-lens, 20 x 20 grid, Otsu Sec. 8.1 defaults)
+//    on the 8 x 8 Cornell box at max depth 3, >= 48 chains as Welch samples, against BDPT
+//    (compare_channels: Šidák over pixels and channels, Stouffer, sum z^2), alpha = 1e-5;
+//  - negative controls, passing when the broken variant IS rejected (validate/render/broken_ramlt.h):
+//    the reverse density evaluated with the region of x instead of y (pairwise, lens and
+//    multi-chain), the angle density without its truncation mass (chi-square), and the image check
+//    with the bidirectional density missing a geometry term (validate/render/broken_path_mutations.h).
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "estimators/mcmc/metropolis_hastings.h"
+#include "lib/core/hash.h"
+#include "lib/core/parallel.h"
+#include "lib/integrator/bdpt.h"
+#include "lib/mcmc/path_space/ramlt.h"
+#include "lib/mcmc/path_space/ramlt_direction.h"
+#include "lib/mcmc/path_space/ramlt_perturbations.h"
+#include "lib/mcmc/path_space/start_paths.h"
+#include "lib/path/light_sampler.h"
+#include "validate/chi2/sampler_chi2.h"
+#include "validate/mcmc/pairwise_balance.h"
+#include "validate/mcmc/pairwise_record.h"
+#include "validate/mcmc/path_space/reference_density.h"
+#include "validate/registry.h"
+#include "validate/render/broken_path_mutations.h"
+#include "validate/render/broken_ramlt.h"
+#include "validate/render/render_compare.h"
+
+namespace tb {
+namespace {
+
+using namespace tb::path_space;
+constexpr double kAlpha = 1e-5;
+constexpr int kMaxDepth = 4;
+constexpr int kRes = 16;
+
+struct SceneCtx {
+  std::unique_ptr<World> world;
+  std::unique_ptr<LightSampler> lights;
+  PathContext ctx;
+};
+const SceneCtx& scene(const std::string& file) {
+  static std::map<std::string, std::unique_ptr<SceneCtx>> cache;
+  auto& s = cache[file];
+  if (!s) {
+    s = std::make_unique<SceneCtx>();
+    s->world = load_scene_at_resolution(file, kRes, kRes);
+    s->lights = std::make_unique<LightSampler>(*s->world);
+    s->ctx = PathContext{s->world.get(), s->lights.get()};
+  }
+  return *s;
+}
+
+CheckResult negate(CheckResult inner) {
+  inner.passed = !inner.passed;
+  inner.message =
+      (inner.passed ? "broken variant rejected as required: " : "BROKEN VARIANT NOT DETECTED: ") + inner.message;
+  return inner;
+}
+
+// Frozen scales on an n x n screen grid: lambda_k = -9 + 4 frac(0.618 k + 0.3), sigma in [0.011,
+// 0.082] rad, about 0.5 to 4 pixels of the 16 x 16 image (a cell is 16 / n pixels).
+RegionalScale frozen_scale(const PathContext& ctx, int n) {
+  auto p = ScreenPartition::make(ctx, "grid", n);
+  std::vector<double> lambda(static_cast<size_t>(p->regions()));
+  for (size_t k = 0; k < lambda.size(); ++k) {
+    const double f = 0.618034 * static_cast<double>(k) + 0.3;
+    lambda[k] = -9.0 + 4.0 * (f - std::floor(f));
+  }
+  return {std::move(p), std::make_shared<const std::vector<double>>(std::move(lambda))};
+}
+
+enum class Fault { kNone, kDestinationScale };
+
+// Pairwise balance of one regional adaptive perturbation (alone), flux from the unbroken density.
+// The check is valid only when >= 20% of the pairs with pi(y) > 0 cross a region boundary: the
+// positive check passes when it is valid and balanced, the negative control when it is valid and
+// NOT balanced (a control that is not exercised is not caught).
+template <class P>
+CheckResult ramlt_pairwise(Fault fault, const CheckContext& cx, const std::string& name, const std::string& file,
+                           int grid, int max_tries) {
+  const SceneCtx& sc = scene(file);
+  const RegionalScale scale = frozen_scale(sc.ctx, grid);
+  const auto correct = std::make_shared<const RamltMutation<P>>(name, 1.0, P(sc.ctx, scale));
+  std::shared_ptr<const PathMutation> m = correct;
+  if (fault == Fault::kDestinationScale) m = std::make_shared<const RamltDestinationScale<P>>(correct);
+  const PathMutation& mut = *m;
+  const std::function<MltPath(Uniforms&)> start = [&sc, &mut](Uniforms& u) {
+    MltPath any;
+    for (int a = 0; a < 4096; ++a)
+      if (auto p = sample_bdpt_path(sc.ctx, u, kMaxDepth)) {
+        if (mut.weight(*p) > 0.0) return *p;
+        any = *p;
+      }
+    return any;
+  };
+  const auto kernel = mcmc::MetropolisHastings(PathTarget{&sc.ctx}, mcmc::SingleProposal(MutationProposal{&mut, nullptr}));
+  using K = decltype(kernel);
+  const auto ref = [&correct](int, const MltPath& x, const MltPath& y) { return correct->density(x, y); };
+  const WithReferenceDensity<K, decltype(ref)> k(kernel, ref, max_tries);
+  const int64_t pairs = cx.size(400, 4000);
+  const uint64_t key = hash_string(name);
+  const auto r = mcmc::check_pairwise_balance<WithReferenceDensity<K, decltype(ref)>>(k, start, pairs, cx.seed, key);
+  CheckResult res = pairwise_record(r, name);
+  // Which pairs cross a region boundary: the same draws as the checker (same streams).
+  std::vector<int> cross(static_cast<size_t>(pairs), 0), live(static_cast<size_t>(pairs), 0);
+  parallel_for(static_cast<size_t>(pairs), [&](size_t i) {
+    Rng rng = Rng::for_sample(cx.seed, key, i);
+    RngUniforms u(rng);
+    const MltPath x = start(u);
+    const auto mv = k.sample_move(x, u);
+    if (!mv || !(k.target_density(mv->y) > 0.0)) return;
+    live[i] = 1;
+    cross[i] = scale.region(x) != scale.region(mv->y);
+  });
+  int64_t n_cross = 0, n_live = 0;
+  for (size_t i = 0; i < cross.size(); ++i) {
+    n_cross += cross[i];
+    n_live += live[i];
+  }
+  const double frac = n_live > 0 ? static_cast<double>(n_cross) / static_cast<double>(n_live) : 0.0;
+  res.details["pairs_across_regions"] = n_cross;
+  res.details["fraction_across_regions"] = frac;
+  res.message = fmt::format("{}, {} x {} grid: {}; {} of {} proposed pairs with pi(y) > 0 cross a region boundary "
+                            "({:.0f}%)", file, grid, grid, res.message, n_cross, n_live, 100.0 * frac);
+  const bool exercised = frac >= 0.2;
+  res.details["exercised"] = exercised;
+  if (!exercised) res.message += " (< 20%: the check does not exercise region boundaries, NOT VALID)";
+  if (fault == Fault::kNone) {
+    res.passed = r.passed && exercised;
+    return res;
+  }
+  // Negative control: caught when valid and unbalanced.
+  res.passed = exercised && !r.passed;
+  res.message = (res.passed ? "broken variant rejected as required: " : "BROKEN VARIANT NOT DETECTED: ") + res.message;
+  return res;
+}
+
+CheckResult lens_pairwise(Fault f, const CheckContext& cx, const std::string& n) {
+  return ramlt_pairwise<RamltLensPerturbation>(f, cx, n, "cornell-box.json", 8, 8);
+}
+// Multi-chain paths (D S+ D ...) exist on the glass scenes only; the continued direction often
+// misses the specular object: up to 64 redraws per pair.
+CheckResult multichain_pairwise(Fault f, const CheckContext& cx, const std::string& n) {
+  return ramlt_pairwise<RamltMultiChainPerturbation>(f, cx, n, "caustic.json", 64, 64);
+}
+
+// ---- the direction kernel against its stated density ----------------------------------------------
+using AngleDensity = double (*)(double, double);
+CheckResult direction_chi2(AngleDensity stated, const CheckContext& cx, const std::string& name) {
+  const Vec3 w = glm::normalize(Vec3(0.3, -0.5, 0.8));
+  const Frame fr = Frame::from_z(w);
+  const std::vector<double> sigmas = {0.02, 0.3, 2.5};
+  const double alpha_each = 1.0 - std::pow(1.0 - kAlpha, 1.0 / static_cast<double>(sigmas.size()));
+  CheckResult res;
+  res.passed = true;
+  res.statistic_name = "min p";
+  res.statistic = 1.0;
+  res.alpha = alpha_each;
+  std::string msg;
+  for (double sigma : sigmas) {
+    const double tmax = std::min(kPi, 10.0 * sigma);  // mass beyond 10 sigma < 1e-22
+    SamplerChi2Options o;
+    o.samples = cx.size(100000, 1000000);
+    o.seed = cx.seed;
+    o.key = hash_values(hash_string(name), static_cast<uint64_t>(sigma * 1000));
+    // (theta, phi) of the sampled direction in the frame of w; stated density per dtheta dphi =
+    // p_w sin(theta) = p_theta / (2 pi) (ramlt_direction.h).
+    const auto r = chi2_test(
+        Chi2Domain::rectangle(Vec2(0.0, 0.0), Vec2(tmax, 2.0 * kPi), 40, 24),
+        [&](const Vec2& u) {
+          const Vec3 l = fr.to_local(TruncatedNormalDirection::sample(w, u, sigma));
+          double phi = std::atan2(l.y, l.x);
+          if (phi < 0) phi += 2.0 * kPi;
+          return Vec2(std::acos(std::clamp(l.z, -1.0, 1.0)), phi);
+        },
+        [&](const Vec2& q) { return stated(q.x, sigma) / (2.0 * kPi); }, o);
+    res.passed = res.passed && r.passed(alpha_each);
+    res.statistic = std::min(res.statistic, r.p_value());
+    res.samples += r.samples;
+    res.details[fmt::format("sigma={}", sigma)] = r.details();
+    msg += fmt::format("{}sigma = {}: {}", msg.empty() ? "" : "; ", sigma, r.message());
+  }
+  res.p_value = res.statistic;
+  res.message = "truncated-normal direction (theta, phi): " + msg;
+  return res;
+}
+
+// ---- image: run_ramlt against BDPT ------------------------------------------------------------------
+CheckResult image_check(const RamltOptions& opt, const CheckContext& cx, const std::string& name) {
+  const std::unique_ptr<World> world = load_scene_at_resolution("cornell-box.json", 8, 8);
+  Film ref(8, 8);
+  RenderSettings rs;
+  rs.spp = cx.size(2048, 8192);
+  rs.passes = 32;
+  rs.max_depth = 3;
+  rs.seed = hash_values(cx.seed, hash_string(name + ".bdpt"));
+  render_bdpt(*world, rs, ref);
+  Film film(8, 8);
+  RenderSettings st;
+  st.passes = cx.size(48, 128);
+  st.spp = st.passes * 160;
+  st.max_depth = 3;
+  st.seed = hash_values(cx.seed, hash_string(name));
+  const RamltStats s = run_ramlt(*world, st, film, opt);
+  const ChannelCompare c = compare_channels(film.welch(), ref.welch(), kAlpha);
+  CheckResult res;
+  res.passed = !c.rejects();
+  res.statistic_name = "p (Šidák over pixel channels)";
+  res.statistic = c.p_value();
+  res.p_value = c.p_value();
+  res.alpha = kAlpha;
+  res.samples = s.mlt.mutations_total;
+  int64_t updates = 0;
+  for (int u : s.maps.updates) updates += u;
+  res.message = fmt::format("{} chains x {} mutations ({} batches of {} steps, {} lambda updates) against BDPT: {}",
+                            s.mlt.chains, s.mlt.mutations_total / std::max<int64_t>(1, s.mlt.chains), s.batches,
+                            s.batch_steps, updates, c.message());
+  res.details = c.details();
+  for (const auto& m : s.mlt.mutations) res.details["acceptance_" + m.name] = m.acceptance_rate();
+  res.details["lambda_updates"] = updates;
+  return res;
+}
+
+void add(const std::string& name, const std::string& desc, CheckKind kind,
+         std::function<CheckResult(const CheckContext&, const std::string&)> f) {
+  Registry::global().add(
+      Check{.name = name, .description = desc, .kind = kind, .run = [=](const CheckContext& cx) { return f(cx, name); }});
+}
+
+const bool registered = [] {
+  const std::string p = "mcmc.ramlt.";
+  add(p + "lens.pairwise",
+      "Regional adaptive lens perturbation (Otsu Sec. 3, Eq. 2-3) at frozen per-region lambda: pi T a symmetric to "
+      "1e-9 on Cornell-box path pairs, >= 20% of them across region boundaries",
+      CheckKind::kDeterministic, [](const CheckContext& cx, const std::string& n) { return lens_pairwise(Fault::kNone, cx, n); });
+  add(p + "multichain.pairwise",
+      "Regional adaptive multi-chain perturbation at frozen per-region lambda: pi T a symmetric to 1e-9 on caustic "
+      "paths D S+ D ..., >= 20% of them across region boundaries",
+      CheckKind::kDeterministic,
+      [](const CheckContext& cx, const std::string& n) { return multichain_pairwise(Fault::kNone, cx, n); });
+  add(p + "direction.chi2",
+      "Truncated-normal direction kernel (Otsu Sec. 3) against its stated density in (theta, phi), sigma = 0.02, 0.3, "
+      "2.5 (chi-square, alpha 1e-5, Šidák)",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) {
+        return direction_chi2(&TruncatedNormalDirection::angle_density, cx, n);
+      });
+  add(p + "lens.image.cornell",
+      "run_ramlt (ramlt-lens, 20 x 20 grid, Otsu Sec. 8.1 defaults; >= 48 chains as Welch samples) against BDPT on "
+      "the 8 x 8 Cornell box (Welch t, Stouffer, sum z^2, alpha 1e-5)",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) { return image_check({}, cx, n); });
+  add(p + "negative_control.lens_destination_scale.pairwise",
+      "Negative control: the pairwise check must reject the lens perturbation's reverse density evaluated with the "
+      "region of x instead of y",
+      CheckKind::kDeterministic,
+      [](const CheckContext& cx, const std::string& n) { return lens_pairwise(Fault::kDestinationScale, cx, n); });
+  add(p + "negative_control.multichain_destination_scale.pairwise",
+      "Negative control: the pairwise check must reject the multi-chain perturbation's reverse density evaluated with "
+      "the region of x instead of y",
+      CheckKind::kDeterministic, [](const CheckContext& cx, const std::string& n) {
+        return multichain_pairwise(Fault::kDestinationScale, cx, n);
+      });
+  add(p + "negative_control.direction_without_truncation.chi2",
+      "Negative control: the direction chi-square must reject the angle density stated without its truncation mass "
+      "erf(pi / (sigma sqrt 2))",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) {
+        return negate(direction_chi2(&angle_density_without_truncation, cx, n));
+      });
+  add(p + "negative_control.bidir_missing_geometry.image",
+      "Negative control: the image check must reject run_ramlt with a bidirectional density without geometry term",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) {
+        RamltOptions o;
+        o.wrap = [](PathMutationList l) {
+          const auto& b = dynamic_cast<const PathProposalMutation<BidirectionalMutation>&>(*l[0]);
+          // Same weight and maximum length as the driver's own.
+          l[0] = std::make_shared<const BidirWithoutGeometryTerm>(b.proposal().context(), b.proposal().max_segments(),
+                                                                  b.base_weight());
+          return l;
+        };
+        return negate(image_check(o, cx, n));
+      });
+  return true;
+}();
+
+}  // namespace
+}  // namespace tb
