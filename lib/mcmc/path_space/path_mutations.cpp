@@ -30,16 +30,18 @@ std::shared_ptr<const PathMutation> make_multi(const PathContext& ctx, const Pat
       [](const MultiChainPerturbation&, const MltPath& x) { return !multi_chain_levels(x).empty(); });
 }
 
-// Otsu et al., Sec. 8.1: lambda0 = 1, the 20 x 20 screen grid (frozen: the registry's instances do
-// not adapt; the driver of ramlt.h builds its own with live scales).
+// The 20 x 20 screen grid of Otsu et al., Sec. 8.1, frozen at lambda = -6 (sigma = 0.05 rad): the
+// registry's instances do not adapt, and at Otsu's lambda0 = 1 (sigma = 1.65 rad) almost every
+// multi-chain proposal fails; the driver of ramlt.h builds its own, from lambda0 = 1, with live scales.
+constexpr double kRegistryLambda = -6.0;
 std::shared_ptr<const PathMutation> make_ramlt_lens(const PathContext& ctx, const PathMutationSettings&, double w) {
   return std::make_shared<const RamltLensMutation>(
-      "ramlt-lens", w, RamltLensPerturbation(ctx, RegionalScale::uniform(ScreenPartition::make(ctx, "grid", 20), 1.0)));
+      "ramlt-lens", w, RamltLensPerturbation(ctx, RegionalScale::uniform(ScreenPartition::make(ctx, "grid", 20), kRegistryLambda)));
 }
 std::shared_ptr<const PathMutation> make_ramlt_multi(const PathContext& ctx, const PathMutationSettings&, double w) {
   return std::make_shared<const RamltMultiChainMutation>(
       "ramlt-multichain", w,
-      RamltMultiChainPerturbation(ctx, RegionalScale::uniform(ScreenPartition::make(ctx, "grid", 20), 1.0)));
+      RamltMultiChainPerturbation(ctx, RegionalScale::uniform(ScreenPartition::make(ctx, "grid", 20), kRegistryLambda)));
 }
 
 std::vector<PathMutationInfo>& table() {

@@ -14,7 +14,7 @@
 //
 // Otsu et al.'s regional adaptive lens and multi-chain perturbations (ramlt_perturbations.h) are
 // registered too ("ramlt-lens", "ramlt-multichain", weight 0.5 as in Otsu Sec. 8.1), outside the
-// default mixture; built from the registry they use the grid partition with every lambda = 1.
+// default mixture; built from the registry they use the 20 x 20 grid with every lambda frozen at -6.
 //
 // Adding a mutation: a Proposal class in its own file and one line in the table of
 // path_mutations.cpp (or register_path_mutation at run time).

@@ -1,0 +1,137 @@
+// Regional adaptive MLT (lib/mcmc/path_space/ramlt*.h, docs/ramlt.md): the direction kernel's
+// normalisation (Otsu Sec. 3), the screen partition (Otsu Sec. 5.4), the registry entries, and the
+// driver's synchronous adaptation: bit-identical images and lambda maps for 1 and 2 threads.
+#include <cmath>
+#include <cstdlib>
+
+#include <gtest/gtest.h>
+
+#include "lib/core/parallel.h"
+#include "lib/mcmc/path_space/path_mutations.h"
+#include "lib/mcmc/path_space/ramlt.h"
+#include "lib/mcmc/path_space/ramlt_direction.h"
+#include "lib/mcmc/path_space/ramlt_perturbations.h"
+#include "lib/mcmc/path_space/start_paths.h"
+#include "lib/path/light_sampler.h"
+#include "validate/render/render_compare.h"
+
+namespace tb::path_space {
+namespace {
+
+std::unique_ptr<World> cornell(int res) {
+  setenv("TB_SCENES_DIR", TB_SOURCE_DIR "/scenes", 0);
+  return load_scene_at_resolution("cornell-box.json", res, res);
+}
+
+TEST(RamltDirection, ErfInverseInvertsErf) {
+  for (double v : {-0.999999, -0.9, -0.3, 0.0, 1e-9, 0.2, 0.7, 0.99, 0.9999999})
+    EXPECT_NEAR(std::erf(erf_inverse(v)), v, 1e-14 * std::max(1.0, 1.0 / (1.0 - std::abs(v)))) << v;
+}
+
+TEST(RamltDirection, AngleDensityIntegratesToOne) {
+  for (double sigma : {0.01, 0.3, 1.0, 3.0, 20.0}) {
+    const int n = 200000;
+    const double h = kPi / n;
+    double s = 0.0;
+    for (int i = 0; i < n; ++i) s += TruncatedNormalDirection::angle_density((i + 0.5) * h, sigma) * h;
+    EXPECT_NEAR(s, 1.0, 1e-6) << sigma;
+  }
+}
+
+TEST(RamltDirection, SampledAngleMatchesInverseCdf) {
+  // t = sample_angle(u) satisfies erf(t / (sigma sqrt 2)) = u Z(sigma).
+  for (double sigma : {0.02, 0.5, 2.5})
+    for (double u : {0.01, 0.25, 0.5, 0.9, 0.999}) {
+      const double t = TruncatedNormalDirection::sample_angle(u, sigma);
+      EXPECT_NEAR(std::erf(t / (sigma * std::sqrt(2.0))), u * TruncatedNormalDirection::mass(sigma), 1e-12);
+    }
+}
+
+TEST(RamltPartition, GridRegionsFollowPixels) {
+  const auto world = cornell(16);
+  const LightSampler lights(*world);
+  const PathContext ctx{world.get(), &lights};
+  const auto grid = ScreenPartition::make(ctx, "grid", 4);
+  EXPECT_EQ(grid->regions(), 16);
+  EXPECT_TRUE(grid->adapts());
+  EXPECT_EQ(ScreenPartition::make(ctx, "fixed")->regions(), 1);
+  EXPECT_FALSE(ScreenPartition::make(ctx, "fixed")->adapts());
+  EXPECT_TRUE(ScreenPartition::make(ctx, "global")->adapts());
+  // A path's region is the cell of its raster position, x fastest (partition.h).
+  Rng rng = Rng::for_sample(3, 0, 0);
+  RngUniforms u(rng);
+  int checked = 0;
+  for (int i = 0; i < 200; ++i) {
+    const auto x = sample_bdpt_path(ctx, u, 3);
+    if (!x) continue;
+    const auto r = path_raster(ctx, *x);
+    if (!r) continue;
+    const int ix = static_cast<int>(r->x / 4.0), iy = static_cast<int>(r->y / 4.0);
+    EXPECT_EQ(grid->region_of(*x), std::min(ix, 3) + 4 * std::min(iy, 3));
+    ++checked;
+  }
+  EXPECT_GT(checked, 100);
+}
+
+TEST(RamltRegistry, RegisteredOutsideTheDefaultMixture) {
+  const auto world = cornell(8);
+  const LightSampler lights(*world);
+  const PathContext ctx{world.get(), &lights};
+  const PathMutationSettings s;
+  ASSERT_NE(find_path_mutation("ramlt-lens"), nullptr);
+  ASSERT_NE(find_path_mutation("ramlt-multichain"), nullptr);
+  EXPECT_FALSE(find_path_mutation("ramlt-lens")->in_default_mixture);
+  for (const auto& m : make_path_mutations(ctx, s)) EXPECT_EQ(m->name().rfind("ramlt-", 0), std::string::npos);
+  EXPECT_EQ(make_all_path_mutations(ctx, s).size(), path_mutations().size());
+}
+
+RamltStats render(const World& w, Film& f, const RamltOptions& o) {
+  RenderSettings st;
+  st.passes = 8;
+  st.spp = 8 * 32;
+  st.max_depth = 3;
+  st.seed = 7;
+  return run_ramlt(w, st, f, o);
+}
+
+TEST(RamltDriver, BitIdenticalForAnyThreadCount) {
+  const auto world = cornell(8);
+  RamltOptions o;
+  o.grid = 4;
+  Film f1(8, 8), f2(8, 8);
+  RamltStats s1, s2;
+  {
+    const ThreadLimit one(1);
+    s1 = render(*world, f1, o);
+  }
+  {
+    const ThreadLimit two(2);
+    s2 = render(*world, f2, o);
+  }
+  const auto a = f1.mean_image(), b = f2.mean_image();
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i], b[i]) << i;
+  EXPECT_EQ(s1.maps.lambda, s2.maps.lambda);
+  EXPECT_EQ(s1.maps.visits, s2.maps.visits);
+  EXPECT_EQ(s1.maps.acceptance_sum, s2.maps.acceptance_sum);
+  // The adaptation ran: lambda moved away from lambda0 in some region.
+  int moved = 0;
+  for (double l : s1.maps.lambda) moved += l != o.adaptation.lambda0;
+  EXPECT_GT(moved, 0);
+  EXPECT_GT(s1.batches, 1);
+}
+
+TEST(RamltDriver, FixedPartitionDoesNotAdapt) {
+  const auto world = cornell(8);
+  RamltOptions o;
+  o.partition = "fixed";
+  Film f(8, 8);
+  const RamltStats s = render(*world, f, o);
+  ASSERT_EQ(s.maps.regions, 1);
+  EXPECT_EQ(s.maps.lambda[0], o.adaptation.lambda0);
+  EXPECT_EQ(s.maps.updates[0], 0);
+  EXPECT_GT(s.maps.visits[0], 0);
+}
+
+}  // namespace
+}  // namespace tb::path_space
