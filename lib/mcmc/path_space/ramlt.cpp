@@ -83,8 +83,8 @@ struct Observation {
 RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, const RamltOptions& opt) {
   const Camera& cam = world.camera();
   if (!cam.lens_is_delta()) throw std::invalid_argument("ramlt: path-space MLT needs a pinhole camera");
-  if (st.time_budget_s > 0 || st.first_pass != 0 || st.pass_count >= 0)
-    throw std::invalid_argument("ramlt: the chains share their adaptation; pass ranges and time budgets are not supported");
+  if (st.time_budget_s > 0)
+    throw std::invalid_argument("ramlt: the chains share their adaptation; time budgets are not supported");
   const LightSampler sampler(world);
   const PathContext ctx{&world, &sampler};
   const int max_depth = std::max(0, st.max_depth);
@@ -196,8 +196,12 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
   }
   out.adaptation_seconds = adapt_s;
 
+  // A pass range gets the chains of the range from the whole coupled run (pass_loop.h's contract:
+  // a range's film does not depend on how the run is cut).
+  const int64_t first = std::clamp<int64_t>(st.first_pass, 0, C);
+  const int64_t end = st.pass_count < 0 ? C : std::min(C, first + st.pass_count);
   double b_sum = 0.0;
-  for (size_t c = 0; c < n; ++c) {
+  for (size_t c = static_cast<size_t>(first); c < static_cast<size_t>(std::max(first, end)); ++c) {
     film.merge_splats(splats[c]);
     const double sc = static_cast<double>(P) * b[c] / static_cast<double>(M);
     film.end_pass(splats[c].entries().empty() ? 0.0 : sc);

@@ -17,8 +17,9 @@
 // for any thread count. Within a batch each chain runs a fixed Metropolis-Hastings kernel that
 // leaves pi invariant; across batches lambda depends on the chains' past, so the per-chain
 // unbiasedness argument of mlt.h holds only as the adaptation diminishes (gamma_j -> 0, Otsu Sec.
-// 4.3); docs/ramlt.md. Pass ranges (first_pass / pass_count) and time budgets are not supported: the
-// chains are coupled through lambda and must all run together.
+// 4.3); docs/ramlt.md. The chains are coupled through lambda and always all run: a pass range
+// (first_pass / pass_count) receives its chains of the whole run (the same film as cutting the
+// whole run, at the cost of the whole run); time budgets are not supported.
 #pragma once
 
 #include <cstdint>
