@@ -8,6 +8,7 @@
 
 #include "lib/core/parallel.h"
 #include "lib/mcmc/path_space/path_mutations.h"
+#include "lib/mcmc/path_space/ramlt_adaptation.h"
 #include "lib/mcmc/path_space/ramlt.h"
 #include "lib/mcmc/path_space/ramlt_direction.h"
 #include "lib/mcmc/path_space/ramlt_perturbations.h"
@@ -73,6 +74,53 @@ TEST(RamltPartition, GridRegionsFollowPixels) {
   EXPECT_GT(checked, 100);
 }
 
+TEST(RamltQuadtree, SplitKeepsIndicesAndRefinesTheLeaf) {
+  mcmc::QuadtreePartition q({0.0, 0.0}, {1.0, 1.0}, 3);
+  EXPECT_EQ(q.regions(), 1);
+  EXPECT_EQ(q.region_of({0.7, 0.2}), 0);
+  EXPECT_EQ(q.split(0), 1);
+  ASSERT_EQ(q.regions(), 4);
+  EXPECT_EQ(q.region_of({0.2, 0.2}), 0);  // lower x, lower y keeps the parent's index
+  EXPECT_EQ(q.region_of({0.7, 0.2}), 1);
+  EXPECT_EQ(q.region_of({0.2, 0.7}), 2);
+  EXPECT_EQ(q.region_of({0.7, 0.7}), 3);
+  EXPECT_EQ(q.region_of({1.5, -3.0}), 1);  // outside: nearest boundary leaf
+  EXPECT_EQ(q.split(3), 4);                // leaf 3 -> 3, 4, 5, 6
+  EXPECT_EQ(q.region_of({0.6, 0.6}), 3);
+  EXPECT_EQ(q.region_of({0.9, 0.9}), 6);
+  EXPECT_EQ(q.region_of({0.2, 0.2}), 0);
+  EXPECT_EQ(q.depth(6), 2);
+  EXPECT_EQ(q.lo(6)[0], 0.75);
+  EXPECT_EQ(q.split(6), 7);
+  EXPECT_EQ(q.split(7), -1);  // max depth 3
+}
+
+TEST(RamltAdaptation, SplittableEqualsRegionalAdaptationWithoutSplits) {
+  mcmc::AdaptationOptions o;
+  mcmc::OtsuAdaptation a(3, o);
+  SplittableAdaptation<> b(3, o);
+  Rng rng = Rng::for_sample(11, 0, 0);
+  for (int i = 0; i < 3000; ++i) {
+    const int r = static_cast<int>(rng.uniform() * 3.0);
+    const double acc = rng.uniform();
+    a.observe(r, acc);
+    b.observe(r, acc);
+  }
+  for (int r = 0; r < 3; ++r) {
+    EXPECT_EQ(a.lambda(r), b.lambda(r));
+    EXPECT_EQ(a.updates(r), b.updates(r));
+  }
+  // A split (Otsu Sec. 6.2): children start from the parent's lambda and n_k / 4 updates.
+  const double l1 = b.lambda(1);
+  const int n1 = b.updates(1);
+  b.split(1, 3);
+  ASSERT_EQ(b.regions(), 6);
+  for (int r : {1, 3, 4, 5}) {
+    EXPECT_EQ(b.lambda(r), l1);
+    EXPECT_EQ(b.updates(r), n1 / 4);
+  }
+}
+
 TEST(RamltRegistry, RegisteredOutsideTheDefaultMixture) {
   const auto world = cornell(8);
   const LightSampler lights(*world);
@@ -119,6 +167,34 @@ TEST(RamltDriver, BitIdenticalForAnyThreadCount) {
   for (double l : s1.maps.lambda) moved += l != o.adaptation.lambda0;
   EXPECT_GT(moved, 0);
   EXPECT_GT(s1.batches, 1);
+}
+
+TEST(RamltDriver, QuadtreeRefinesAndStaysBitIdentical) {
+  const auto world = cornell(8);
+  RamltOptions o;
+  o.partition = "quadtree";
+  o.refine_every = 2048;  // small: several refinements in a test-sized run
+  o.split_threshold = 100;
+  Film f1(8, 8), f2(8, 8);
+  RamltStats s1, s2;
+  {
+    const ThreadLimit one(1);
+    s1 = render(*world, f1, o);
+  }
+  {
+    const ThreadLimit two(2);
+    s2 = render(*world, f2, o);
+  }
+  EXPECT_GT(s1.maps.refinements, 1);
+  EXPECT_GT(s1.maps.regions, 4);
+  EXPECT_EQ(s1.maps.leaf_boxes.size(), static_cast<size_t>(s1.maps.regions));
+  EXPECT_EQ(s1.maps.lambda, s2.maps.lambda);
+  const auto a = f1.mean_image(), b = f2.mean_image();
+  for (size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i], b[i]) << i;
+  // The leaves tile [0, 1]^2.
+  double area = 0.0;
+  for (const auto& bx : s1.maps.leaf_boxes) area += (bx[2] - bx[0]) * (bx[3] - bx[1]);
+  EXPECT_NEAR(area, 1.0, 1e-12);
 }
 
 TEST(RamltDriver, FixedPartitionDoesNotAdapt) {

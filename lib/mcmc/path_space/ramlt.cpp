@@ -16,6 +16,7 @@
 #include "lib/core/parallel.h"
 #include "lib/film/png_preview.h"
 #include "lib/mcmc/path_space/bidirectional_mutation.h"
+#include "lib/mcmc/path_space/ramlt_adaptation.h"
 #include "lib/mcmc/path_space/ramlt_perturbations.h"
 #include "lib/mcmc/path_space/start_paths.h"
 
@@ -91,9 +92,18 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
   const PathTarget target{&ctx};
 
   // Partition and the shared scales (Otsu Sec. 5.2-5.4).
-  const auto partition = ScreenPartition::make(ctx, opt.partition, opt.grid);
-  const int R = partition->regions();
-  mcmc::OtsuAdaptation adapter(R, opt.adaptation);
+  // The quadtree is refined between batches: the driver keeps the non-const tree.
+  std::shared_ptr<mcmc::QuadtreePartition> tree;
+  std::shared_ptr<const ScreenPartition> partition;
+  if (opt.partition == "quadtree") {
+    tree = std::make_shared<mcmc::QuadtreePartition>(std::array<double, 2>{0.0, 0.0}, std::array<double, 2>{1.0, 1.0},
+                                                     opt.quadtree_max_depth);
+    partition = std::make_shared<const ScreenPartition>(ctx, tree);
+  } else {
+    partition = ScreenPartition::make(ctx, opt.partition, opt.grid);
+  }
+  int R = partition->regions();
+  SplittableAdaptation<> adapter(R, opt.adaptation);
   auto lambda = std::make_shared<std::vector<double>>(static_cast<size_t>(R), opt.adaptation.lambda0);
   const RegionalScale scale{partition, lambda};
 
@@ -115,8 +125,11 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
   const int64_t C = std::max<int64_t>(1, st.passes);
   const int64_t M = std::max<int64_t>(1, st.spp * P / C);
   const int64_t n_boot = opt.bootstrap_per_chain > 0 ? opt.bootstrap_per_chain : std::max<int64_t>(256, 4 * P / C);
-  const int64_t B = std::clamp<int64_t>(
-      opt.batch_steps > 0 ? opt.batch_steps : (static_cast<int64_t>(opt.adaptation.batch) * R + C - 1) / C, 1, M);
+  const auto batch_length = [&](int regions) {
+    return std::clamp<int64_t>(
+        opt.batch_steps > 0 ? opt.batch_steps : (static_cast<int64_t>(opt.adaptation.batch) * regions + C - 1) / C, 1, M);
+  };
+  int64_t B = batch_length(R);
 
   RamltStats out;
   out.batch_steps = B;
@@ -125,8 +138,8 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
   RamltRegionMaps& maps = out.maps;
   maps.partition = partition->name();
   maps.regions = R;
-  maps.acceptance_sum.assign(static_cast<size_t>(R), 0.0);
-  maps.visits.assign(static_cast<size_t>(R), 0);
+  std::vector<int64_t> since_refine(static_cast<size_t>(R), 0);  // reports per leaf since the last refinement
+  int64_t mutations_since_refine = 0;
   const auto t0 = std::chrono::steady_clock::now();
 
   // Start-up of every chain (mlt.h): bootstrap b_c and the resampled start path.
@@ -185,16 +198,47 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
     const auto ta = std::chrono::steady_clock::now();
     for (size_t c = 0; c < n; ++c)
       for (const Observation& ob : obs[c]) {
+        ++since_refine[static_cast<size_t>(ob.region)];
+        if (maps.visits.size() < static_cast<size_t>(R)) {
+          maps.visits.resize(static_cast<size_t>(R), 0);
+          maps.acceptance_sum.resize(static_cast<size_t>(R), 0.0);
+        }
         maps.acceptance_sum[static_cast<size_t>(ob.region)] += ob.acceptance;
         ++maps.visits[static_cast<size_t>(ob.region)];
         if (partition->adapts()) adapter.observe(ob.region, ob.acceptance);  // lines 11-18, Eq. 4-6
       }
+    // Quadtree refinement (Otsu Sec. 6.2): each leaf existing now with more than M_split reports
+    // is split once; its children inherit lambda and n_k / 4 (SplittableAdaptation::split).
+    mutations_since_refine += steps * C;
+    if (tree && mutations_since_refine >= opt.refine_every) {
+      mutations_since_refine = 0;
+      const int leaves = R;
+      bool split_any = false;
+      for (int r = 0; r < leaves; ++r) {
+        if (since_refine[static_cast<size_t>(r)] <= opt.split_threshold || !tree->can_split(r)) continue;
+        tree->split(r);
+        adapter.split(r, 3);
+        if (static_cast<size_t>(r) < maps.visits.size()) {  // the maps count reports since the leaf was made
+          maps.visits[static_cast<size_t>(r)] = 0;
+          maps.acceptance_sum[static_cast<size_t>(r)] = 0.0;
+        }
+        split_any = true;
+      }
+      R = tree->regions();
+      since_refine.assign(static_cast<size_t>(R), 0);
+      if (split_any) {
+        ++maps.refinements;
+        B = batch_length(R);
+      }
+    }
+    lambda->resize(static_cast<size_t>(R));
     for (int r = 0; r < R; ++r) (*lambda)[static_cast<size_t>(r)] = adapter.lambda(r);
     adapt_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - ta).count();
     ++out.batches;
     if (st.progress) st.progress(static_cast<double>(done + steps) / static_cast<double>(M));
   }
   out.adaptation_seconds = adapt_s;
+  out.batch_steps = B;  // the last batch length (a quadtree lengthens it as it grows)
 
   // A pass range gets the chains of the range from the whole coupled run (pass_loop.h's contract:
   // a range's film does not depend on how the run is cut).
@@ -222,6 +266,9 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
   stats.b_mean = stats.chains > 0 ? b_sum / static_cast<double>(stats.chains) : 0.0;
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
+  maps.regions = R;
+  maps.visits.resize(static_cast<size_t>(R), 0);
+  maps.acceptance_sum.resize(static_cast<size_t>(R), 0.0);
   maps.lambda.resize(static_cast<size_t>(R));
   maps.updates.resize(static_cast<size_t>(R));
   for (int r = 0; r < R; ++r) {
@@ -230,12 +277,18 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
   }
   maps.width = film.width();
   maps.height = film.height();
-  const auto cells = mcmc::make_partition<2>(opt.partition, {{0.0, 0.0}, {1.0, 1.0}, {opt.grid, opt.grid}});
+  std::shared_ptr<const ScreenCellPartition> cells = tree;
+  if (!cells) cells = mcmc::make_partition<2>(opt.partition, {{0.0, 0.0}, {1.0, 1.0}, {opt.grid, opt.grid}});
   maps.pixel_region.resize(static_cast<size_t>(maps.width) * static_cast<size_t>(maps.height));
   for (int py = 0; py < maps.height; ++py)
     for (int px = 0; px < maps.width; ++px)
       maps.pixel_region[static_cast<size_t>(py) * static_cast<size_t>(maps.width) + static_cast<size_t>(px)] =
           cells->region_of({(px + 0.5) / maps.width, (py + 0.5) / maps.height});
+  if (tree)
+    for (int r = 0; r < R; ++r) {
+      const auto lo = tree->lo(r), hi = tree->hi(r);
+      maps.leaf_boxes.push_back({lo[0], lo[1], hi[0], hi[1]});
+    }
   return out;
 }
 
@@ -246,6 +299,10 @@ void write_ramlt_maps(const RamltRegionMaps& m, const std::string& base) {
   std::vector<double> acc(static_cast<size_t>(m.regions));
   for (int r = 0; r < m.regions; ++r) acc[static_cast<size_t>(r)] = m.acceptance(r);
   j["acceptance"] = acc;
+  if (!m.leaf_boxes.empty()) {
+    j["leaf_boxes"] = m.leaf_boxes;
+    j["refinements"] = m.refinements;
+  }
   write_file_atomic(base + ".ramlt.json", j.dump(1));
   if (m.regions == 0 || m.pixel_region.empty()) return;
   const auto [lmin, lmax] = std::minmax_element(m.lambda.begin(), m.lambda.end());

@@ -22,6 +22,7 @@
 // whole run, at the cost of the whole run); time budgets are not supported.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -41,8 +42,14 @@ enum class RamltPerturbation { kLens, kMultiChain };
 
 struct RamltOptions {
   RamltPerturbation perturbation = RamltPerturbation::kLens;
-  std::string partition = "grid";   // fixed | global | grid (estimators/mcmc/partition.h)
+  std::string partition = "grid";   // fixed | global | grid | quadtree (estimators/mcmc/partition.h)
   int grid = 20;                     // N_top: grid x grid screen cells (Otsu Sec. 8.1)
+  // Quadtree (Otsu Sec. 6.2, defaults of Sec. 8.1): after every refine_every mutations (all chains
+  // together, at the next batch boundary) each leaf with more than split_threshold reports since
+  // the last refinement is split once; children inherit lambda and n_k / 4 updates.
+  int64_t split_threshold = 5000;    // M_split
+  int64_t refine_every = 10000000;   // M_refine
+  int quadtree_max_depth = 12;
   mcmc::AdaptationOptions adaptation;  // Otsu Sec. 8.1 defaults
   double perturbation_weight = 0.5, bidirectional_weight = 0.5;
   // Steps per chain per synchronous batch; 0: ceil(L * regions / chains), so that a batch makes
@@ -54,7 +61,7 @@ struct RamltOptions {
   std::function<PathMutationList(PathMutationList)> wrap;
 };
 
-// Per region: final lambda, reports (visits of proposals of the perturbation), mean acceptance,
+// Per region (quadtree: per leaf of the final tree, reports counted since the leaf was made): final lambda, reports (visits of proposals of the perturbation), mean acceptance,
 // number of updates; and the region of every film pixel (for the maps).
 struct RamltRegionMaps {
   std::string partition;
@@ -64,6 +71,8 @@ struct RamltRegionMaps {
   std::vector<int> updates;
   int width = 0, height = 0;
   std::vector<int> pixel_region;
+  std::vector<std::array<double, 4>> leaf_boxes;  // quadtree: (x0, y0, x1, y1) of each region in [0, 1]^2
+  int refinements = 0;                            // quadtree refinement passes that split a leaf
   double acceptance(int r) const {
     return visits[static_cast<size_t>(r)] > 0 ? acceptance_sum[static_cast<size_t>(r)] / static_cast<double>(visits[static_cast<size_t>(r)]) : 0.0;
   }

@@ -9,7 +9,7 @@
 //
 // The partition (Otsu Sec. 5.4, "2d Partition for the Lens Perturbation"): P_k = paths whose raster
 // position rp(w_{x1 -> x2}), normalised to [0, 1]^2, lies in S_k, S_k the cells of a partition of
-// estimators/mcmc/partition.h (fixed, global, grid; Otsu Sec. 6.1). The multi-chain perturbation
+// estimators/mcmc/partition.h (fixed, global, grid, quadtree; Otsu Sec. 6.1-6.2). The multi-chain perturbation
 // uses the same screen-space partition and one sigma for every direction it perturbs (Otsu's 4d
 // partition of Sec. 5.4 / 6.3 is not built, docs/ramlt.md).
 //
@@ -44,7 +44,8 @@ using ScreenCellPartition = mcmc::RegionPartition<std::array<double, 2>>;
 class ScreenPartition {
  public:
   ScreenPartition(const PathContext& ctx, std::shared_ptr<const ScreenCellPartition> cells);
-  // "fixed", "global" or "grid" (n x n cells over [0, 1]^2; Otsu Sec. 8.1: N_top = 20).
+  // "fixed", "global", "grid" (n x n cells over [0, 1]^2; Otsu Sec. 8.1: N_top = 20) or
+  // "quadtree" (the root only: the driver of ramlt.h builds and refines its own tree).
   static std::shared_ptr<const ScreenPartition> make(const PathContext& ctx, const std::string& name, int n = 20);
   int regions() const { return cells_->regions(); }
   bool adapts() const { return cells_->adapts(); }
