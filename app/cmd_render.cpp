@@ -77,6 +77,8 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     path_space::RamltOptions ro;
     if (a.integrator == "ramlt-multichain") ro.perturbation = path_space::RamltPerturbation::kMultiChain;
     if (!a.partition.empty()) ro.partition = a.partition;
+    if (a.refine_every > 0) ro.refine_every = a.refine_every;
+    if (a.split_threshold > 0) ro.split_threshold = a.split_threshold;
     const path_space::RamltStats rs = path_space::run_ramlt(*world, st, film, ro);
     for (const auto& m : rs.mlt.mutations) report.mutations.push_back({m.name, m.proposed, m.accepted, m.errors});
     report.mutations_total = rs.mlt.mutations_total;
@@ -120,6 +122,7 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     path_space::write_ramlt_maps(*ramlt_maps, base);
     rec["ramlt_maps"] = base + ".ramlt.json";
     rec["partition"] = ramlt_maps->partition;
+    rec["ramlt_regions"] = ramlt_maps->regions;
   }
   write_file_atomic(std::filesystem::path(a.out).replace_extension(".json").string(), rec.dump(1));
   fmt::print("{}: {}x{}, {} passes, {} spp in {:.2f} s ({:.3g} samples/s); {} non-finite samples rejected\n", a.out,

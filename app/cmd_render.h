@@ -20,7 +20,9 @@ struct RenderArgs {
   std::string resolution;   // "WxH": overrides the camera resolution of the scene file
   bool no_progress = false;
   bool list = false;
-  std::string partition;    // ramlt-*: fixed | global | grid (default grid)
+  std::string partition;    // ramlt-*: fixed | global | grid | quadtree (default grid)
+  int64_t refine_every = 0; // ramlt-* quadtree: M_refine (0: Otsu Sec. 8.1's 10^7)
+  int64_t split_threshold = 0;  // ramlt-* quadtree: M_split (0: 5000)
 };
 
 int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted);

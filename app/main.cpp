@@ -195,7 +195,11 @@ int main(int argc, char** argv) {
   render->add_option("-o,--out", rargs.out, "Output EXR path")->capture_default_str();
   render->add_option("--resolution", rargs.resolution, "WxH: override the scene camera's resolution");
   render->add_option("--partition", rargs.partition,
-                     "ramlt-lens / ramlt-multichain: region partition of the adaptation (fixed, global, grid; default grid)");
+                     "ramlt-lens / ramlt-multichain: region partition of the adaptation (fixed, global, grid, quadtree; default grid)");
+  render->add_option("--refine-every", rargs.refine_every,
+                     "ramlt-* with --partition quadtree: mutations between refinements (default 1e7, Otsu Sec. 8.1)");
+  render->add_option("--split-threshold", rargs.split_threshold,
+                     "ramlt-* with --partition quadtree: reports of a leaf above which it is split (default 5000)");
   render->add_flag("--list", rargs.list, "List the integrators and exit");
   render->add_flag("--no-progress", rargs.no_progress, "No progress line on stderr");
 

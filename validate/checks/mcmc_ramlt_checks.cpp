@@ -12,10 +12,12 @@
 //  - mcmc.ramlt.lens.image.cornell: run_ramlt (ramlt-lens, 20 x 20 grid, Otsu Sec. 8.1 defaults)
 //    on the 8 x 8 Cornell box at max depth 3, >= 48 chains as Welch samples, against BDPT
 //    (compare_channels: Šidák over pixels and channels, Stouffer, sum z^2), alpha = 1e-5;
+//  - mcmc.ramlt.lens_quadtree.image.cornell: the same with the quadtree partition (Otsu Sec. 6.2),
+//    refined every 65536 mutations, leaves with > 500 reports split;
 //  - negative controls, passing when the broken variant IS rejected (validate/render/broken_ramlt.h):
 //    the reverse density evaluated with the region of x instead of y (pairwise, lens and
-//    multi-chain), the angle density without its truncation mass (chi-square), and the image check
-//    with the bidirectional density missing a geometry term (validate/render/broken_path_mutations.h).
+//    multi-chain), the angle density without its truncation mass (chi-square), and the image checks
+//    (grid, quadtree) with the bidirectional density missing a geometry term (validate/render/broken_path_mutations.h).
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -232,13 +234,33 @@ CheckResult image_check(const RamltOptions& opt, const CheckContext& cx, const s
   res.samples = s.mlt.mutations_total;
   int64_t updates = 0;
   for (int u : s.maps.updates) updates += u;
-  res.message = fmt::format("{} chains x {} mutations ({} batches of {} steps, {} lambda updates) against BDPT: {}",
-                            s.mlt.chains, s.mlt.mutations_total / std::max<int64_t>(1, s.mlt.chains), s.batches,
-                            s.batch_steps, updates, c.message());
+  res.message = fmt::format(
+      "{} chains x {} mutations ({} batches, last {} steps; {} regions, {} refinements; {} lambda updates) against "
+      "BDPT: {}",
+      s.mlt.chains, s.mlt.mutations_total / std::max<int64_t>(1, s.mlt.chains), s.batches, s.batch_steps, s.maps.regions,
+      s.maps.refinements, updates, c.message());
   res.details = c.details();
   for (const auto& m : s.mlt.mutations) res.details["acceptance_" + m.name] = m.acceptance_rate();
   res.details["lambda_updates"] = updates;
   return res;
+}
+
+// The quadtree variant of the image check: refinements every 65536 mutations (about 7 in the quick run).
+RamltOptions quadtree() {
+  RamltOptions o;
+  o.partition = "quadtree";
+  o.refine_every = 65536;
+  o.split_threshold = 500;
+  return o;
+}
+
+// The driver's bidirectional mutation replaced by the one without geometry term (same weight and
+// maximum length; validate/render/broken_path_mutations.h).
+PathMutationList without_geometry_term(PathMutationList l) {
+  const auto& b = dynamic_cast<const PathProposalMutation<BidirectionalMutation>&>(*l[0]);
+  l[0] = std::make_shared<const BidirWithoutGeometryTerm>(b.proposal().context(), b.proposal().max_segments(),
+                                                          b.base_weight());
+  return l;
 }
 
 void add(const std::string& name, const std::string& desc, CheckKind kind,
@@ -268,6 +290,10 @@ const bool registered = [] {
       "run_ramlt (ramlt-lens, 20 x 20 grid, Otsu Sec. 8.1 defaults; >= 48 chains as Welch samples) against BDPT on "
       "the 8 x 8 Cornell box (Welch t, Stouffer, sum z^2, alpha 1e-5)",
       CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) { return image_check({}, cx, n); });
+  add(p + "lens_quadtree.image.cornell",
+      "run_ramlt (ramlt-lens, quadtree refined every 65536 mutations above 500 reports; >= 48 chains as Welch "
+      "samples) against BDPT on the 8 x 8 Cornell box (alpha 1e-5)",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) { return image_check(quadtree(), cx, n); });
   add(p + "negative_control.lens_destination_scale.pairwise",
       "Negative control: the pairwise check must reject the lens perturbation's reverse density evaluated with the "
       "region of x instead of y",
@@ -289,13 +315,15 @@ const bool registered = [] {
       "Negative control: the image check must reject run_ramlt with a bidirectional density without geometry term",
       CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) {
         RamltOptions o;
-        o.wrap = [](PathMutationList l) {
-          const auto& b = dynamic_cast<const PathProposalMutation<BidirectionalMutation>&>(*l[0]);
-          // Same weight and maximum length as the driver's own.
-          l[0] = std::make_shared<const BidirWithoutGeometryTerm>(b.proposal().context(), b.proposal().max_segments(),
-                                                                  b.base_weight());
-          return l;
-        };
+        o.wrap = without_geometry_term;
+        return negate(image_check(o, cx, n));
+      });
+  add(p + "negative_control.bidir_missing_geometry.image_quadtree",
+      "Negative control: the quadtree image check must reject run_ramlt with a bidirectional density without "
+      "geometry term",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) {
+        RamltOptions o = quadtree();
+        o.wrap = without_geometry_term;
         return negate(image_check(o, cx, n));
       });
   return true;
