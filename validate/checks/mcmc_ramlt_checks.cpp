@@ -15,6 +15,9 @@
 //    (compare_channels: Šidák over pixels and channels, Stouffer, sum z^2), alpha = 1e-5;
 //  - mcmc.ramlt.lens_quadtree.image.cornell: the same with the quadtree partition (Otsu Sec. 6.2),
 //    refined every 65536 mutations, leaves with > 500 reports split;
+//  - mcmc.ramlt.multichain.image.caustic_grouped: run_ramlt (multi-chain) on the 16 x 16 caustic scene
+//    at depth 10 against BDPT over pixel groups (as mlt.path_space.image.caustic_grouped); the
+//    multi-chain perturbation makes about 1% of the proposals there, the rest are bidirectional;
 //  - negative controls, passing when the broken variant IS rejected (validate/render/broken_ramlt.h):
 //    the reverse density evaluated with the region of x instead of y (pairwise, lens and
 //    multi-chain), the angle density without its truncation mass (chi-square), and the image checks
@@ -48,6 +51,7 @@
 #include "validate/registry.h"
 #include "validate/render/broken_path_mutations.h"
 #include "validate/render/broken_ramlt.h"
+#include "validate/render/pixel_groups.h"
 #include "validate/render/render_compare.h"
 
 namespace tb {
@@ -313,6 +317,12 @@ RamltOptions quadtree() {
   return o;
 }
 
+RamltOptions multichain() {
+  RamltOptions o;
+  o.perturbation = RamltPerturbation::kMultiChain;
+  return o;
+}
+
 // The driver's bidirectional mutation replaced by the one without geometry term (same weight and
 // maximum length; validate/render/broken_path_mutations.h).
 PathMutationList without_geometry_term(PathMutationList l) {
@@ -320,6 +330,62 @@ PathMutationList without_geometry_term(PathMutationList l) {
   l[0] = std::make_shared<const BidirWithoutGeometryTerm>(b.proposal().context(), b.proposal().max_segments(),
                                                           b.base_weight());
   return l;
+}
+
+// ---- image by pixel groups: run_ramlt (multi-chain) against BDPT on the 16 x 16 caustic scene ----
+// As mlt.path_space.image.caustic_grouped (mcmc_path_space_checks.cpp): sums over pixel groups
+// holding >= 16 expected chain starts each (grouping from a separate pilot BDPT image), each chain's
+// group sums one Welch sample, 1024 chains (4096 full) x 1024 mutations, the scene's max depth.
+CheckResult grouped_image_check(const RamltOptions& opt, const CheckContext& cx, const std::string& name,
+                                const std::string& file) {
+  constexpr int kGroupRes = 16;
+  constexpr double kStartsPerGroup = 16.0;
+  const std::unique_ptr<World> world = load_scene_at_resolution(file, kGroupRes, kGroupRes);
+  const int max_depth = world->integrator_defaults().value("max_depth", 8);
+  const int64_t chains = cx.size(1024, 4096);
+  RenderSettings rs;
+  rs.max_depth = max_depth;
+  Film pilot(kGroupRes, kGroupRes);
+  rs.spp = 256;
+  rs.passes = 8;
+  rs.seed = hash_values(cx.seed, hash_string(name + ".pilot"));
+  render_bdpt(*world, rs, pilot);
+  GroupedWelch ref_groups(
+      group_pixels_by_share(pilot.mean_image(), kGroupRes, kGroupRes, kStartsPerGroup / double(chains)));
+  GroupedWelch groups(ref_groups.groups());
+  Film ref(kGroupRes, kGroupRes);
+  ref_groups.attach(ref);
+  rs.spp = cx.size(1024, 4096);
+  rs.passes = 32;
+  rs.seed = hash_values(cx.seed, hash_string(name + ".bdpt"));
+  render_bdpt(*world, rs, ref);
+  ref_groups.detach(ref);
+  Film film(kGroupRes, kGroupRes);
+  groups.attach(film);
+  RenderSettings st;
+  st.passes = chains;
+  st.spp = chains * 1024 / (kGroupRes * kGroupRes);
+  st.max_depth = max_depth;
+  st.seed = hash_values(cx.seed, hash_string(name));
+  const RamltStats s = run_ramlt(*world, st, film, opt);
+  groups.detach(film);
+  const ChannelCompare c = compare_channels(groups.welch(), ref_groups.welch(), kAlpha);
+  CheckResult res;
+  res.passed = !c.rejects();
+  res.statistic_name = "p (Šidák over pixel-group channels)";
+  res.statistic = c.p_value();
+  res.p_value = c.p_value();
+  res.alpha = kAlpha;
+  res.samples = s.mlt.mutations_total;
+  res.message = fmt::format("{} chains x {} mutations against BDPT (max depth {}), {} pixel groups: {}", s.mlt.chains,
+                            s.mlt.mutations_total / std::max<int64_t>(1, s.mlt.chains), max_depth,
+                            group_count(ref_groups.groups()), c.message());
+  res.details = c.details();
+  for (const auto& m : s.mlt.mutations) {
+    res.details[fmt::format("acceptance_{}", m.name)] = m.acceptance_rate();
+    res.details[fmt::format("proposed_{}", m.name)] = m.proposed;
+  }
+  return res;
 }
 
 void add(const std::string& name, const std::string& desc, CheckKind kind,
@@ -354,6 +420,12 @@ const bool registered = [] {
       "run_ramlt (ramlt-lens, quadtree refined every 65536 mutations above 500 reports; >= 48 chains as Welch "
       "samples) against BDPT on the 8 x 8 Cornell box (alpha 1e-5)",
       CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) { return image_check(quadtree(), cx, n); });
+  add(p + "multichain.image.caustic_grouped",
+      "run_ramlt (ramlt-multichain, 20 x 20 grid) against BDPT on the 16 x 16 caustic scene at depth 10, sums over "
+      "pixel groups holding >= 16 expected chain starts each (>= 1024 chains as Welch samples, alpha 1e-5)",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) {
+        return grouped_image_check(multichain(), cx, n, "caustic.json");
+      });
   add(p + "negative_control.lens_destination_scale.pairwise",
       "Negative control: the pairwise check must reject the lens perturbation's reverse density evaluated with the "
       "region of x instead of y",
@@ -377,6 +449,14 @@ const bool registered = [] {
         RamltOptions o;
         o.wrap = without_geometry_term;
         return negate(image_check(o, cx, n));
+      });
+  add(p + "negative_control.bidir_missing_geometry.image_caustic_grouped",
+      "Negative control: the grouped caustic image check must reject run_ramlt (multi-chain) with a bidirectional "
+      "density without geometry term",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) {
+        RamltOptions o = multichain();
+        o.wrap = without_geometry_term;
+        return negate(grouped_image_check(o, cx, n, "caustic.json"));
       });
   add(p + "negative_control.bidir_missing_geometry.image_quadtree",
       "Negative control: the quadtree image check must reject run_ramlt with a bidirectional density without "
