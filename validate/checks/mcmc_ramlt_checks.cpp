@@ -21,7 +21,7 @@
 //  - negative controls, passing when the broken variant IS rejected (validate/render/broken_ramlt.h):
 //    the reverse density evaluated with the region of x instead of y (pairwise, lens and
 //    multi-chain), the angle density without its truncation mass (chi-square), and the image checks
-//    (grid, quadtree) with the bidirectional density missing a geometry term (validate/render/broken_path_mutations.h).
+//    (grid, quadtree, grouped caustic) with the bidirectional density missing a geometry term (validate/render/broken_path_mutations.h).
 #include <algorithm>
 #include <atomic>
 #include <cmath>
