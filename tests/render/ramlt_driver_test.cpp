@@ -186,6 +186,11 @@ TEST(RamltDriver, QuadtreeRefinesAndStaysBitIdentical) {
     s2 = render(*world, f2, o);
   }
   EXPECT_GT(s1.maps.refinements, 1);
+  // Every chain ran exactly M = spp P / chains steps although the batch length grew with the tree.
+  EXPECT_EQ(s1.mlt.mutations_total, 8 * (8 * 32 * 64 / 8));
+  int64_t proposed = 0;
+  for (const auto& m : s1.mlt.mutations) proposed += m.proposed;
+  EXPECT_EQ(proposed, s1.mlt.mutations_total);
   EXPECT_GT(s1.maps.regions, 4);
   EXPECT_EQ(s1.maps.leaf_boxes.size(), static_cast<size_t>(s1.maps.regions));
   EXPECT_EQ(s1.maps.lambda, s2.maps.lambda);

@@ -170,7 +170,8 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
   // Synchronous batches: B steps per chain at frozen lambda, then the reports in chain order.
   std::vector<std::vector<Observation>> obs(n);
   double adapt_s = 0.0;
-  for (int64_t done = 0; done < M; done += B) {
+  int64_t done = 0;  // steps run by every live chain
+  while (done < M) {
     if (st.interrupted && st.interrupted->load()) break;
     const int64_t steps = std::min(B, M - done);
     parallel_for(n, [&](size_t c) {
@@ -235,7 +236,8 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
     for (int r = 0; r < R; ++r) (*lambda)[static_cast<size_t>(r)] = adapter.lambda(r);
     adapt_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - ta).count();
     ++out.batches;
-    if (st.progress) st.progress(static_cast<double>(done + steps) / static_cast<double>(M));
+    done += steps;
+    if (st.progress) st.progress(static_cast<double>(done) / static_cast<double>(M));
   }
   out.adaptation_seconds = adapt_s;
   out.batch_steps = B;  // the last batch length (a quadtree lengthens it as it grows)
@@ -247,11 +249,12 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
   double b_sum = 0.0;
   for (size_t c = static_cast<size_t>(first); c < static_cast<size_t>(std::max(first, end)); ++c) {
     film.merge_splats(splats[c]);
-    const double sc = static_cast<double>(P) * b[c] / static_cast<double>(M);
+    // Splat scale P b_c / (steps run): M, or fewer when interrupted.
+    const double sc = done > 0 ? static_cast<double>(P) * b[c] / static_cast<double>(done) : 0.0;
     film.end_pass(splats[c].entries().empty() ? 0.0 : sc);
     b_sum += b[c];
     if (!alive[c]) ++stats.chains_without_start;
-    stats.mutations_total += alive[c] ? M : 0;
+    stats.mutations_total += alive[c] ? done : 0;
     for (size_t k = 0; k < K; ++k) {
       const mcmc::ComponentCounts& lc = local[c][k];
       MutationStats& m = stats.mutations[k];
