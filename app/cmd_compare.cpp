@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "lib/core/atomic_file.h"
+#include "app/compare_metrics.h"
 #include "lib/film/exr_io.h"
 #include "validate/image_compare.h"
 
@@ -52,6 +53,30 @@ int compare_images(const CompareArgs& a) {
                r.worst.y, r.worst.channel >= 0 && r.worst.channel < 3 ? kChannel[r.worst.channel] : "?", r.worst.mean_a,
                r.worst.mean_b, r.worst.t, r.worst.dof, r.worst.p);
   fmt::print("  mean relative difference (A - B) / B: {:+.4g}\n", r.mean_relative_difference);
+  {  // error of A with B as the reference (docs/compare.md, rRMSE; relMSE with eps = 0.01)
+    std::vector<Rgb> ma(img_a.pixels()), mb(img_b.pixels()), vb(img_b.pixels());
+    for (size_t i = 0; i < ma.size() && i < mb.size(); ++i) {
+      ma[i] = img_a.mean(i);
+      mb[i] = img_b.mean(i);
+      vb[i] = img_b.count[i] > 0 ? img_b.variance(i) / double(img_b.count[i]) : Rgb(0.0);
+    }
+    const compare::RelativeError e = compare::relative_error(ma, mb, vb, compare::reference_floor(mb, 0.01));
+    fmt::print("  A against B as reference: rRMSE {:.4g} (B's own {:.3g}; {} pixel-channels above 1% of the mean), "
+               "relMSE(eps 0.01) {:.4g}\n",
+               e.rrmse, e.rrmse_ref, e.channels, compare::relmse_eps(ma, mb));
+    // The part of the error that one global scale explains (an estimator's normalisation, e.g.
+    // the bootstrap constant of PSS MLT, is common to all pixels of a pass): A rescaled so that
+    // its channel sums equal B's.
+    Rgb sa(0.0), sb(0.0);
+    for (size_t i = 0; i < ma.size(); ++i) sa += ma[i], sb += mb[i];
+    std::vector<Rgb> scaled = ma;
+    for (auto& v : scaled)
+      for (int c = 0; c < 3; ++c) v[c] *= sa[c] > 0 ? sb[c] / sa[c] : 1.0;
+    const compare::RelativeError es = compare::relative_error(scaled, mb, vb, compare::reference_floor(mb, 0.01));
+    fmt::print("  image sums A / B: R {:.5f}, G {:.5f}, B {:.5f}; A rescaled to B's sums: rRMSE {:.4g}, relMSE {:.4g}\n",
+               sb[0] > 0 ? sa[0] / sb[0] : 0.0, sb[1] > 0 ? sa[1] / sb[1] : 0.0, sb[2] > 0 ? sa[2] / sb[2] : 0.0,
+               es.rrmse, compare::relmse_eps(scaled, mb));
+  }
   fmt::print("{} (combined p = {:.4g})\n", r.rejects() ? "DIFFERENT" : "consistent", r.p_value());
   if (!a.json_out.empty()) {
     nlohmann::json j = r.details();

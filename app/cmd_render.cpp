@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <stdexcept>
 
@@ -23,7 +24,10 @@ namespace tb {
 
 int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   if (a.list) {
-    for (const auto& i : integrators()) fmt::print("{:<12} {}\n", i.name, i.description);
+    for (const auto& i : integrators()) {
+      fmt::print("{:<12} {}\n", i.name, i.description);
+      for (const auto& p : i.parameters) fmt::print("{:<12}   --param {}=...  {}\n", "", p.name, p.description);
+    }
     return 0;
   }
   const IntegratorInfo* integ = find_integrator(a.integrator);
@@ -31,6 +35,30 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     std::string names;
     for (const auto& i : integrators()) names += (names.empty() ? "" : ", ") + i.name;
     fmt::print(stderr, "tb render: unknown integrator '{}' (known: {})\n", a.integrator, names);
+    return 2;
+  }
+  std::map<std::string, double> params;
+  for (const std::string& kv : a.params) {
+    const size_t eq = kv.find('=');
+    double v = 0.0;
+    size_t used = 0;
+    bool ok = eq != std::string::npos && eq > 0;
+    if (ok) {
+      try {
+        v = std::stod(kv.substr(eq + 1), &used);
+      } catch (const std::exception&) {
+        ok = false;
+      }
+      ok = ok && used == kv.size() - eq - 1;
+    }
+    if (!ok) {
+      fmt::print(stderr, "tb render: --param '{}' is not NAME=NUMBER\n", kv);
+      return 2;
+    }
+    params[kv.substr(0, eq)] = v;
+  }
+  if (const std::string err = validate_params(*integ, params); !err.empty()) {
+    fmt::print(stderr, "tb render: {}\n", err);
     return 2;
   }
   const bool ramlt = a.integrator.rfind("ramlt-", 0) == 0;
@@ -49,6 +77,7 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   st.passes = std::min(a.passes, st.spp);
   st.time_budget_s = a.time_s;
   st.interrupted = interrupted;
+  st.params = params;
   RunReport report;
   st.report = &report;
   if (a.time_s > 0) {  // open-ended passes of default_pass_spp each, until the budget runs out
@@ -77,8 +106,7 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     path_space::RamltOptions ro;
     if (a.integrator == "ramlt-multichain") ro.perturbation = path_space::RamltPerturbation::kMultiChain;
     if (!a.partition.empty()) ro.partition = a.partition;
-    if (a.refine_every > 0) ro.refine_every = a.refine_every;
-    if (a.split_threshold > 0) ro.split_threshold = a.split_threshold;
+    ro = path_space::apply_ramlt_params(ro, st.params);
     const path_space::RamltStats rs = path_space::run_ramlt(*world, st, film, ro);
     for (const auto& m : rs.mlt.mutations) report.mutations.push_back({m.name, m.proposed, m.accepted, m.errors});
     report.mutations_total = rs.mlt.mutations_total;
@@ -101,6 +129,7 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
                         {"seed", a.seed},
                         {"passes", passes},
                         {"max_depth", st.max_depth},
+                        {"params", params},
                         {"resolution", {film.width(), film.height()}},
                         {"spp", spp_done},
                         {"seconds", seconds},

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace tb {
 
@@ -21,8 +22,7 @@ struct RenderArgs {
   bool no_progress = false;
   bool list = false;
   std::string partition;    // ramlt-*: fixed | global | grid | quadtree (default grid)
-  int64_t refine_every = 0; // ramlt-* quadtree: M_refine (0: Otsu Sec. 8.1's 10^7)
-  int64_t split_threshold = 0;  // ramlt-* quadtree: M_split (0: 5000)
+  std::vector<std::string> params;  // NAME=VALUE, integrator parameters
 };
 
 int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted);

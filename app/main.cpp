@@ -187,19 +187,17 @@ int main(int argc, char** argv) {
   auto* render = app.add_subcommand("render", "Render a scene file to OpenEXR (+ PNG preview, JSON record)");
   render->add_option("scene", rargs.scene, "Scene file (JSON, docs/scene.md)");
   render->add_option("--integrator", rargs.integrator, "Integrator name (see --list)")->capture_default_str();
-  render->add_option("--spp", rargs.spp, "Samples per pixel (default: the scene's, else 16); with --time, per pass (default 1, PSS MCMC: 16384 / pixels)");
+  render->add_option("--spp", rargs.spp, "Samples per pixel (default: the scene's, else 16); with --time, per pass (default 1, PSS MCMC: 65536 / pixels)");
   render->add_option("--passes", rargs.passes, "Welch samples per pixel (spp is split over them)")->capture_default_str();
   render->add_option("--time", rargs.time_s, "Time budget in seconds: render passes until it runs out");
   render->add_option("--seed", rargs.seed, "Seed");
   render->add_option("--threads", rargs.threads, "Worker threads (0: all cores)");
   render->add_option("-o,--out", rargs.out, "Output EXR path")->capture_default_str();
   render->add_option("--resolution", rargs.resolution, "WxH: override the scene camera's resolution");
+  render->add_option("--param", rargs.params,
+                     "NAME=VALUE: an integrator parameter (repeatable; --list shows each integrator's)");
   render->add_option("--partition", rargs.partition,
                      "ramlt-lens / ramlt-multichain: region partition of the adaptation (fixed, global, grid, quadtree; default grid)");
-  render->add_option("--refine-every", rargs.refine_every,
-                     "ramlt-* with --partition quadtree: mutations between refinements (default 1e7, Otsu Sec. 8.1)");
-  render->add_option("--split-threshold", rargs.split_threshold,
-                     "ramlt-* with --partition quadtree: reports of a leaf above which it is split (default 5000)");
   render->add_flag("--list", rargs.list, "List the integrators and exit");
   render->add_flag("--no-progress", rargs.no_progress, "No progress line on stderr");
 

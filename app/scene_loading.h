@@ -23,7 +23,7 @@ std::unique_ptr<World> load_scene_file(const std::string& path, const std::strin
 // pixel each, spp = n * passes: n samples per pixel for path tracing, light tracing and BDPT; n P
 // mutations after a bootstrap for the primary-sample-space MCMC integrators (P = pixel count);
 // one chain of n P mutations for path-space MLT. n = 1, except for the primary-sample-space
-// integrators, whose pass starts with a bootstrap of at least 8192 samples: n = ceil(16384 / P),
+// integrators, whose pass starts with a bootstrap of at least 8192 samples: n = ceil(65536 / P),
 // and multi-stage MLT, whose pass also builds its guides: n = ceil(131072 / P).
 int64_t default_pass_spp(const std::string& integrator, int64_t pixels);
 

@@ -1,7 +1,8 @@
 # tb_add_library(NAME "DIR;DIR..." DEPS...)
 # One library per layer. Sources are the *.cpp files below the given folders (globbed with
 # CONFIGURE_DEPENDS so adding a file needs no edit here). A layer with no .cpp yet is an
-# INTERFACE library so header-only layers link the same way.
+# INTERFACE library so header-only layers link the same way. The include directory is the source
+# tree in the build and <prefix>/include once installed (cmake/TestbenchInstall.cmake).
 function(tb_add_library name dirs)
   set(sources "")
   foreach(d IN LISTS dirs)
@@ -11,11 +12,11 @@ function(tb_add_library name dirs)
   endforeach()
   if(sources)
     add_library(${name} STATIC ${sources})
-    target_include_directories(${name} PUBLIC ${PROJECT_SOURCE_DIR})
+    target_include_directories(${name} PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}> $<INSTALL_INTERFACE:include>)
     target_link_libraries(${name} PUBLIC ${ARGN})
   else()
     add_library(${name} INTERFACE)
-    target_include_directories(${name} INTERFACE ${PROJECT_SOURCE_DIR})
+    target_include_directories(${name} INTERFACE $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}> $<INSTALL_INTERFACE:include>)
     target_link_libraries(${name} INTERFACE ${ARGN})
   endif()
 endfunction()

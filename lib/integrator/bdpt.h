@@ -7,9 +7,8 @@
 //
 // RenderSettings::only_length / only_s restrict the estimator to paths of one length (segments)
 // and to one unweighted technique (s, t = length + 1 - s), for the per-technique checks.
-// IntegratorFault::kMisMissingDensity drops the density of the vertex next to the connection on
-// the light side (p_E of x_{s-1}) from the weight's ratios, kShadingCorrectionInverted uses the
-// reciprocal of the adjoint BSDF's shading-normal factor on the light side: negative controls.
+// The implementation is a template over the estimator's terms (bdpt_impl.h, estimator_terms.h)
+// so that the negative controls of validate/ can get one term wrong without a switch here.
 #pragma once
 
 #include <span>
@@ -30,9 +29,7 @@ int64_t render_bdpt(const World& world, const RenderSettings& settings, Film& fi
 // Camera subpath starting with the camera ray through `raster`; at most max_vertices vertices.
 int generate_camera_subpath(const PathContext& ctx, const Vec2& raster, const Vec2& lens_u, Uniforms& u,
                             int max_vertices, std::vector<PathVertex>* path);
-// fault: kShadingCorrectionInverted samples with the inverted adjoint correction (negative control).
-int generate_light_subpath(const PathContext& ctx, Uniforms& u, int max_vertices, std::vector<PathVertex>* path,
-                           IntegratorFault fault = IntegratorFault::kNone);
+int generate_light_subpath(const PathContext& ctx, Uniforms& u, int max_vertices, std::vector<PathVertex>* path);
 
 // The weighted contribution of technique (s, t) from two subpaths, and for t = 1 the raster
 // position to splat to. Returns zero when the connection fails.
@@ -46,6 +43,6 @@ struct Connection {
   PathVertex sampled;
 };
 Connection connect_bdpt(const PathContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
-                        int s, int t, Uniforms& u, IntegratorFault fault = IntegratorFault::kNone);
+                        int s, int t, Uniforms& u);
 
 }  // namespace tb

@@ -4,21 +4,11 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
 namespace tb {
-
-// Deliberate errors for the negative controls of the integrator checks (VALIDATION.md: every
-// statistical check has a control that must fail). Never set by `tb render`.
-enum class IntegratorFault {
-  kNone,
-  kMisMissingDensity,   // an MIS weight computed with one density left out of its denominator
-  kNeeNoCosine,         // next-event estimation without the cosine at the receiving vertex
-  kRouletteNoInverse,   // Russian roulette that drops paths without dividing survivors by q
-  kShadingCorrectionInverted,  // light subpaths (lt, bdpt) with the reciprocal of the adjoint's
-                               // shading-normal factor (lib/path/scattering.h)
-};
 
 // What an MCMC integrator reports of its run (`tb render` prints it and writes it to the JSON
 // record next to the image): per mutation type, proposals and acceptances.
@@ -51,7 +41,10 @@ struct RenderSettings {
   // used by the per-technique checks. -1: all.
   int only_length = -1;
   int only_s = -1;           // with only_s >= 0 the single technique is unweighted (weight 1)
-  IntegratorFault fault = IntegratorFault::kNone;
+  // Integrator parameters by name (`tb render --param NAME=VALUE`); each integrator lists the
+  // names it takes (IntegratorInfo::parameters) and ignores nothing: the program rejects a name
+  // the integrator does not list. Empty: the integrator's defaults.
+  std::map<std::string, double> params;
   std::function<void(double)> progress = [](double) {};
   const std::atomic<bool>* interrupted = nullptr;  // stop between passes
   RunReport* report = nullptr;  // filled by MCMC integrators when set

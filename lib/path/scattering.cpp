@@ -16,21 +16,19 @@ bool SurfaceScatter::sides_ok(const Vec3& wo, const Vec3& wi) const {
   return glm::dot(wo, hit_->ng) * glm::dot(wi, hit_->ng) > 0;
 }
 
-double importance_shading_correction(const SurfacePoint& hit, const Vec3& wo, const Vec3& wi,
-                                     ShadingCorrection which) {
+double importance_shading_correction(const SurfacePoint& hit, const Vec3& wo, const Vec3& wi) {
   // Veach 1997, Eq. 5.19 with wo = l (towards the light side), wi = c (towards the camera side):
   // f_imp(l -> c) |c.n| = f*_s(l -> c) |l.n| |c.ng| / |l.ng|, the measurement's factor at the
   // vertex over the |l.ng| of the light subpath's area density (docs/path.md, Shading normals).
-  double num = std::abs(glm::dot(wo, hit.n)) * std::abs(glm::dot(wi, hit.ng));
-  double den = std::abs(glm::dot(wo, hit.ng)) * std::abs(glm::dot(wi, hit.n));
+  const double num = std::abs(glm::dot(wo, hit.n)) * std::abs(glm::dot(wi, hit.ng));
+  const double den = std::abs(glm::dot(wo, hit.ng)) * std::abs(glm::dot(wi, hit.n));
   if (num == den) return 1.0;  // n == ng: exactly 1, no rounding
-  if (which == ShadingCorrection::kInverted) std::swap(num, den);
   return den > 0 ? num / den : 0.0;
 }
 
 double SurfaceScatter::correction(const Vec3& wo, const Vec3& wi, TransportMode mode) const {
   if (mode != TransportMode::kImportance) return 1.0;
-  return importance_shading_correction(*hit_, wo, wi, correction_);
+  return correction_(*hit_, wo, wi);
 }
 
 Rgb SurfaceScatter::f(const Vec3& wo, const Vec3& wi, TransportMode mode) const {

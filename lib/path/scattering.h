@@ -21,16 +21,15 @@
 
 namespace tb {
 
-// The shading-normal factor of the adjoint BSDF: kAdjoint is Veach's (Eq. 5.19), the one every
-// integrator uses; kInverted, its reciprocal, exists only for a negative control
-// (IntegratorFault::kShadingCorrectionInverted).
-enum class ShadingCorrection : uint8_t { kAdjoint, kInverted };
-
 // The factor f_imp(wo -> wi) / f*_s(wo -> wi) = |wo.n| |wi.ng| / (|wo.ng| |wi.n|) at `hit` (n the
 // shading normal, wo the light-side direction, wi the camera-side one; Veach 1997, Eq. 5.19).
 // Exactly 1 where n == ng; 0 where |wo.ng| |wi.n| = 0.
-double importance_shading_correction(const SurfacePoint& hit, const Vec3& wo, const Vec3& wi,
-                                     ShadingCorrection which = ShadingCorrection::kAdjoint);
+double importance_shading_correction(const SurfacePoint& hit, const Vec3& wo, const Vec3& wi);
+
+// The shading-normal factor a SurfaceScatter applies in importance transport: Veach's
+// importance_shading_correction in every integrator; a negative control (validate/) passes a
+// wrong one.
+using ImportanceCorrection = double (*)(const SurfacePoint& hit, const Vec3& wo, const Vec3& wi);
 
 struct WorldBsdfSample {
   Vec3 wi{0.0};
@@ -44,7 +43,8 @@ struct WorldBsdfSample {
 class SurfaceScatter {
  public:
   // `hit` (a Hit or a SurfacePoint) must outlive the object.
-  SurfaceScatter(const SurfacePoint& hit, const Bsdf& bsdf, ShadingCorrection correction = ShadingCorrection::kAdjoint)
+  SurfaceScatter(const SurfacePoint& hit, const Bsdf& bsdf,
+                 ImportanceCorrection correction = &importance_shading_correction)
       : hit_(&hit), bsdf_(&bsdf), flags_(bsdf.flags()), correction_(correction) {}
 
   Rgb f(const Vec3& wo, const Vec3& wi, TransportMode mode) const;
@@ -74,7 +74,7 @@ class SurfaceScatter {
   const SurfacePoint* hit_;
   const Bsdf* bsdf_;
   uint32_t flags_;              // bsdf_->flags(), read once (a virtual call)
-  ShadingCorrection correction_;  // kAdjoint except in a negative control
+  ImportanceCorrection correction_;  // importance_shading_correction except in a negative control
   // Storage for a frame that is left uninitialised until build_frame constructs it: two
   // default-constructed Frames (18 doubles) would otherwise be written for every vertex.
   union FrameSlot {

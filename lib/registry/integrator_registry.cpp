@@ -1,6 +1,7 @@
 #include "lib/registry/integrator_registry.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "lib/integrator/albedo_integrator.h"
 #include "lib/integrator/bdpt.h"
@@ -12,6 +13,38 @@
 #include "lib/mcmc/pss/pss_driver.h"
 
 namespace tb {
+
+namespace {
+
+std::vector<IntegratorParameter> ramlt_parameters() {
+  std::vector<IntegratorParameter> out;
+  for (const auto& [name, description] : path_space::ramlt_parameter_list()) out.push_back({name, description});
+  return out;
+}
+
+std::vector<IntegratorParameter> pss_parameters() {
+  return {{"bootstrap", "bootstrap samples per pass (default: PssSettings::bootstrap_for)"},
+          {"chains", "chains per pass (default 64)"},
+          {"large_step", "large-step probability (default 0.3)"},
+          {"sigma", "small-step standard deviation (default 0.01)"}};
+}
+
+}  // namespace
+
+std::string validate_params(const IntegratorInfo& info, const std::map<std::string, double>& params) {
+  for (const auto& [name, value] : params) {
+    bool known = false;
+    for (const auto& p : info.parameters) known = known || p.name == name;
+    if (!known) {
+      std::string names;
+      for (const auto& p : info.parameters) names += (names.empty() ? "" : ", ") + p.name;
+      return "integrator '" + info.name + "' has no parameter '" + name + "' (" +
+             (names.empty() ? std::string("it takes none") : "it takes: " + names) + ")";
+    }
+    if (!std::isfinite(value)) return "parameter '" + name + "' must be a finite number";
+  }
+  return {};
+}
 
 const std::vector<IntegratorInfo>& integrators() {
   // An explicit table, not static registrars: tb_render is a static library and self-registering
@@ -27,27 +60,31 @@ const std::vector<IntegratorInfo>& integrators() {
         {"mlt", "Veach's path-space MLT: bidirectional mutation, lens and caustic perturbations through specular chains (pinhole)",
          [](const World& w, const RenderSettings& s, Film& f) { return render_mlt(w, s, f); }},
         {"ramlt-lens", "regional adaptive MLT (Otsu et al.): bidirectional mutation + regional adaptive lens "
-         "perturbation, 20 x 20 screen grid, adapted in synchronous batches (pinhole)",
-         [](const World& w, const RenderSettings& s, Film& f) { return render_ramlt(w, s, f, {}); }},
+         "perturbation, 20 x 20 screen grid, adapted in synchronous batches (pinhole; tb render --partition)",
+         [](const World& w, const RenderSettings& s, Film& f) {
+           return render_ramlt(w, s, f, path_space::apply_ramlt_params({}, s.params));
+         },
+         ramlt_parameters()},
         {"ramlt-multichain", "regional adaptive MLT (Otsu et al.): bidirectional mutation + regional adaptive "
-         "multi-chain perturbation, 20 x 20 screen grid, adapted in synchronous batches (pinhole)",
+         "multi-chain perturbation, 20 x 20 screen grid, adapted in synchronous batches (pinhole; tb render --partition)",
          [](const World& w, const RenderSettings& s, Film& f) {
            path_space::RamltOptions o;
            o.perturbation = path_space::RamltPerturbation::kMultiChain;
-           return render_ramlt(w, s, f, o);
-         }},
+           return render_ramlt(w, s, f, path_space::apply_ramlt_params(o, s.params));
+         },
+         ramlt_parameters()},
         {"mmlt", "multiplexed MLT (Hachisuka et al. 2014): primary-sample-space chains per path length over single BDPT techniques",
-         [](const World& w, const RenderSettings& s, Film& f) { return render_mmlt(w, s, f); }},
+         [](const World& w, const RenderSettings& s, Film& f) { return render_mmlt(w, s, f); }, pss_parameters()},
         {"pssmlt", "primary sample space MLT (Kelemen et al. 2002) over BDPT: large and small steps, expected-value splats",
-         [](const World& w, const RenderSettings& s, Film& f) { return render_pssmlt(w, s, f); }},
+         [](const World& w, const RenderSettings& s, Film& f) { return render_pssmlt(w, s, f); }, pss_parameters()},
         {"pssmlt-pt", "primary sample space MLT (Kelemen et al. 2002) over the path tracer (one NEE+MIS radiance sample per state)",
-         [](const World& w, const RenderSettings& s, Film& f) { return render_pssmlt_pt(w, s, f); }},
+         [](const World& w, const RenderSettings& s, Film& f) { return render_pssmlt_pt(w, s, f); }, pss_parameters()},
         {"msmlt", "multi-stage PSSMLT over BDPT (Hoberock & Hart 2010): target f / I~(pixel), I~ a recursively refined coarse image",
          [](const World& w, const RenderSettings& s, Film& f) { return render_msmlt(w, s, f); }},
         {"msmlt-mmlt", "multi-stage MMLT (Hoberock & Hart 2010 target over Hachisuka et al. 2014's per-length chains)",
          [](const World& w, const RenderSettings& s, Film& f) { return render_msmlt_mmlt(w, s, f); }},
         {"pssmlt-pt-rescaled", "PSSMLT over the path tracer, small step sigma rescaled by the path's luminance (Szirmay-Kalos & Szecsi 2017)",
-         [](const World& w, const RenderSettings& s, Film& f) { return render_pssmlt_pt_rescaled(w, s, f); }},
+         [](const World& w, const RenderSettings& s, Film& f) { return render_pssmlt_pt_rescaled(w, s, f); }, pss_parameters()},
         {"pt", "path tracing with next-event estimation, MIS (power heuristic) and Russian roulette",
          [](const World& w, const RenderSettings& s, Film& f) { return render_pt(w, s, f); }},
     };

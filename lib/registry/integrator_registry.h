@@ -14,12 +14,23 @@
 
 namespace tb {
 
+struct IntegratorParameter {
+  std::string name;
+  std::string description;  // with its default
+};
+
 struct IntegratorInfo {
   std::string name;
   std::string description;
   // Renders into the film; returns the number of passes (Welch samples per pixel) done.
   std::function<int64_t(const World&, const RenderSettings&, Film&)> render;
+  // The RenderSettings::params it reads.
+  std::vector<IntegratorParameter> parameters = {};
 };
+
+// Checks settings.params against the integrator's parameter list: empty when every name is
+// known and every value finite, else a message naming the first bad parameter and the known ones.
+std::string validate_params(const IntegratorInfo& info, const std::map<std::string, double>& params);
 
 // The registered integrators, sorted by name.
 const std::vector<IntegratorInfo>& integrators();

@@ -35,6 +35,15 @@ TEST(CompareMetrics, ConstantRelativeErrorIsTheRrmse) {
   EXPECT_NEAR(e.effective_terms, 150.0, 1e-6);
 }
 
+TEST(CompareMetrics, RelMseWithEpsilonMatchesItsDefinition) {
+  // (x - r)^2 / (r^2 + 0.01) averaged over every pixel-channel, dark ones included.
+  const std::vector<Rgb> ref = {Rgb(1.0, 0.0, 0.5), Rgb(2.0, 0.1, 0.0)};
+  const std::vector<Rgb> img = {Rgb(1.1, 0.2, 0.5), Rgb(1.0, 0.1, std::numeric_limits<double>::quiet_NaN())};
+  const double expect = (0.01 / 1.01 + 0.04 / 0.01 + 0.0 + 1.0 / 4.01 + 0.0) / 5.0;  // NaN left out
+  EXPECT_NEAR(compare::relmse_eps(img, ref), expect, 1e-12);
+  EXPECT_EQ(compare::relmse_eps(ref, ref), 0.0);
+}
+
 TEST(CompareMetrics, FloorLeavesOutDarkChannelsAndCountsThem) {
   std::vector<Rgb> ref = ramp(10), img = ref;
   ref[3] = Rgb(0.0, 1e-9, 5.0);

@@ -4,7 +4,7 @@
 //  - pt and lt estimate the same image: Welch comparison (per pixel-channel Welch t-test with
 //    Šidák, Stouffer and sum z^2; alpha = 0.001 for the whole comparison), fixed seeds;
 //  - images are bit-identical with 1 and 2 threads;
-//  - negative controls: each IntegratorFault makes pt disagree with the fault-free pt
+//  - negative controls: each broken estimator term makes pt disagree with the exact pt
 //    (same comparison, alpha = 0.001), in this scene where each of them matters.
 #include <gtest/gtest.h>
 
@@ -16,6 +16,7 @@
 #include "lib/material/lambert.h"
 #include "lib/registry/integrator_registry.h"
 #include "validate/image_compare.h"
+#include "validate/render/broken_integrators.h"
 
 namespace tb {
 namespace {
@@ -108,22 +109,25 @@ TEST(IntegratorPtLt, RayCountsAreReported) {
   EXPECT_GT(rc.shadow, 0);
 }
 
-class IntegratorFaultTest : public ::testing::TestWithParam<IntegratorFault> {};
+class IntegratorFaultTest : public ::testing::TestWithParam<EstimatorFault> {};
 
 TEST_P(IntegratorFaultTest, FaultyPathTracerIsRejected) {
   const auto w = small_box();
   const WelchImage good = render("pt", *w, settings(301, 16 * 32, 16));
-  RenderSettings st = settings(302, 16 * 32, 16);
-  st.fault = GetParam();
-  const WelchImage bad = render("pt", *w, st);
+  const RenderSettings st = settings(302, 16 * 32, 16);
+  const RenderFunction broken = broken_integrator("pt", GetParam());
+  ASSERT_TRUE(broken);
+  Film film(w->camera().width(), w->camera().height());
+  EXPECT_EQ(broken(*w, st, film), st.passes);
+  const WelchImage bad = film.welch();
   const ImageCompareResult r = compare_welch_images(bad, good, 0.001);
   RecordProperty("comparison", r.message());
   EXPECT_TRUE(r.rejects()) << "fault " << static_cast<int>(GetParam()) << " not caught: " << r.message();
 }
 
 INSTANTIATE_TEST_SUITE_P(Faults, IntegratorFaultTest,
-                         ::testing::Values(IntegratorFault::kMisMissingDensity, IntegratorFault::kNeeNoCosine,
-                                           IntegratorFault::kRouletteNoInverse));
+                         ::testing::Values(EstimatorFault::kMisMissingDensity, EstimatorFault::kNeeNoCosine,
+                                           EstimatorFault::kRouletteNoInverse));
 
 TEST(IntegratorPtLt, FaultFreeRendersWithOtherSeedsAgree) {
   // The fault tests' control: the same comparison between two fault-free renders accepts.

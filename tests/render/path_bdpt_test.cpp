@@ -18,6 +18,7 @@
 #include "lib/path/path.h"
 #include "lib/path/scattering.h"
 #include "lib/scene/scene_loader.h"
+#include "validate/render/broken_integrators.h"
 
 namespace tb {
 namespace {
@@ -153,7 +154,7 @@ TEST(PathBdpt, AdjointShadingCorrectionIdentity) {
                        std::abs(glm::dot(c, hit.ng));
     const double imp = SurfaceScatter(hit, *bsdf).f(l, c, TransportMode::kImportance).r *
                        std::abs(glm::dot(c, hit.n)) * std::abs(glm::dot(l, hit.ng));
-    const double inv = SurfaceScatter(hit, *bsdf, ShadingCorrection::kInverted).f(l, c, TransportMode::kImportance).r *
+    const double inv = SurfaceScatter(hit, *bsdf, &inverted_importance_shading_correction).f(l, c, TransportMode::kImportance).r *
                        std::abs(glm::dot(c, hit.n)) * std::abs(glm::dot(l, hit.ng));
     ASSERT_GT(rad, 0.0);
     worst = std::max(worst, rel(imp, rad));
@@ -164,7 +165,7 @@ TEST(PathBdpt, AdjointShadingCorrectionIdentity) {
 }
 
 // Negative control of SmoothMeshWeightsAndContributions: with the inverted shading-normal factor
-// on the light subpath (IntegratorFault::kShadingCorrectionInverted) the unweighted contribution
+// on the light subpath (EstimatorFault::kShadingCorrectionInverted) the unweighted contribution
 // of connections with s >= 2 departs from f(X) / p_{s,t}(X) (by the same cosine-scaled measure).
 TEST(PathBdpt, InvertedShadingCorrectionBreaksContributions) {
   const auto world = load_small("smooth-mesh.json", 32);
@@ -177,10 +178,10 @@ TEST(PathBdpt, InvertedShadingCorrectionBreaksContributions) {
     RngUniforms rng(stream);
     const Vec2 raster(rng.next() * 32, rng.next() * 32);
     const int nc = generate_camera_subpath(ctx, raster, rng.next2(), rng, 5, &cam);
-    const int nl = generate_light_subpath(ctx, rng, 4, &light, IntegratorFault::kShadingCorrectionInverted);
+    const int nl = generate_light_subpath_broken(EstimatorFault::kShadingCorrectionInverted, ctx, rng, 4, &light);
     for (int t = 1; t <= nc; ++t)
       for (int s = 2; s <= nl; ++s) {
-        const Connection c = connect_bdpt(ctx, light, cam, s, t, rng, IntegratorFault::kShadingCorrectionInverted);
+        const Connection c = connect_bdpt_broken(EstimatorFault::kShadingCorrectionInverted, ctx, light, cam, s, t, rng);
         if (is_black(c.unweighted)) continue;
         const auto x = full_path(light, cam, s, t, c);
         const double p = technique_density(path_densities(ctx, x), s);
@@ -206,7 +207,7 @@ TEST(PathBdpt, MissingDensityBreaksTheWeightSum) {
     const int nl = generate_light_subpath(ctx, rng, 5, &light);
     for (int t = 2; t <= nc; ++t)
       for (int s = 2; s <= nl; ++s) {
-        const Connection c = connect_bdpt(ctx, light, cam, s, t, rng, IntegratorFault::kMisMissingDensity);
+        const Connection c = connect_bdpt_broken(EstimatorFault::kMisMissingDensity, ctx, light, cam, s, t, rng);
         if (is_black(c.unweighted)) continue;
         const auto x = full_path(light, cam, s, t, c);
         worst = std::max(worst, std::abs(mis_weight(path_densities(ctx, x), s, MisKind::kPower) - c.weight));

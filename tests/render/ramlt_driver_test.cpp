@@ -14,6 +14,7 @@
 #include "lib/mcmc/path_space/ramlt_perturbations.h"
 #include "lib/mcmc/path_space/start_paths.h"
 #include "lib/path/light_sampler.h"
+#include "lib/registry/integrator_registry.h"
 #include "validate/render/render_compare.h"
 
 namespace tb::path_space {
@@ -131,6 +132,25 @@ TEST(RamltRegistry, RegisteredOutsideTheDefaultMixture) {
   EXPECT_FALSE(find_path_mutation("ramlt-lens")->in_default_mixture);
   for (const auto& m : make_path_mutations(ctx, s)) EXPECT_EQ(m->name().rfind("ramlt-", 0), std::string::npos);
   EXPECT_EQ(make_all_path_mutations(ctx, s).size(), path_mutations().size());
+}
+
+TEST(RamltRegistry, ParametersByName) {
+  const RamltOptions o = apply_ramlt_params({}, {{"grid", 8}, {"refine_every", 1000}, {"split_threshold", 50},
+                                                 {"lambda0", -2}, {"target_acceptance", 0.3}, {"batch_steps", 4}});
+  EXPECT_EQ(o.grid, 8);
+  EXPECT_EQ(o.refine_every, 1000);
+  EXPECT_EQ(o.split_threshold, 50);
+  EXPECT_EQ(o.adaptation.lambda0, -2.0);
+  EXPECT_EQ(o.adaptation.target_acceptance, 0.3);
+  EXPECT_EQ(o.batch_steps, 4);
+  EXPECT_THROW(apply_ramlt_params({}, {{"grid", 0}}), std::invalid_argument);
+  EXPECT_THROW(apply_ramlt_params({}, {{"target_acceptance", 1.0}}), std::invalid_argument);
+  for (const char* name : {"ramlt-lens", "ramlt-multichain"}) {
+    const IntegratorInfo* info = find_integrator(name);
+    ASSERT_NE(info, nullptr) << name;
+    EXPECT_EQ(validate_params(*info, {{"grid", 8}, {"split_threshold", 10}}), "");
+    EXPECT_NE(validate_params(*info, {{"chains", 8}}), "");
+  }
 }
 
 RamltStats render(const World& w, Film& f, const RamltOptions& o) {

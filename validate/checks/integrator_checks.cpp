@@ -2,7 +2,7 @@
 // docs/integrator-checks.md): every registered path tracer ("pt"), light tracer ("lt") and
 // bidirectional path tracer ("bdpt") against exact images of closed-form worlds
 // (validate/render/analytic_worlds.h), against each other on the shipped scenes, every BDPT
-// technique against the MIS combination, negative controls (the IntegratorFault variants) that
+// technique against the MIS combination, negative controls (the broken estimator terms of validate/render/broken_integrators.h) that
 // must be caught, and convergence-rate / efficiency fits. An integrator that is not registered
 // fails its checks with "not registered": a missing estimator never passes.
 #include <map>
@@ -17,6 +17,7 @@
 #include "lib/core/hash.h"
 #include "validate/registry.h"
 #include "validate/render/analytic_worlds.h"
+#include "validate/render/broken_integrators.h"
 #include "validate/render/naive_path_tracer.h"
 #include "validate/render/render_compare.h"
 #include "validate/render/render_convergence.h"
@@ -124,7 +125,7 @@ CheckResult analytic_compare(const std::string& integrator, const AnalyticScene&
   r.details["render"] = run.summary();
   r.details["settings"] = {{"spp", st.spp}, {"passes", st.passes}, {"max_depth", st.max_depth}, {"seed", st.seed},
                            {"russian_roulette", st.russian_roulette}, {"rr_min_depth", st.rr_min_depth},
-                           {"fault", int(st.fault)}};
+                           };
   r.details["scene"] = scene.scene;
   r.details["exact_pixel_0"] = {scene.exact[0].r, scene.exact[0].g, scene.exact[0].b};
   if (run.nonfinite() > 0) {
@@ -183,20 +184,20 @@ CheckResult run_exact_images(const CheckContext& ctx) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// 4. Negative controls: an IntegratorFault in a world where it matters; PASS = rejected.
+// 4. Negative controls: a broken estimator term in a world where it matters; PASS = rejected.
 
 struct ControlCase {
   std::string fault_name;
-  IntegratorFault fault;
+  EstimatorFault fault;
   std::string world;  // analytic world key
   std::string sizes;  // the analytic case whose sizes it uses
 };
 
 const std::vector<ControlCase>& control_cases() {
   static const std::vector<ControlCase> c = {
-      {"mis_missing_density", IntegratorFault::kMisMissingDensity, "one_bounce_sphere", "one_bounce_sphere"},
-      {"nee_no_cosine", IntegratorFault::kNeeNoCosine, "one_bounce_sphere", "one_bounce_sphere"},
-      {"roulette_no_inverse", IntegratorFault::kRouletteNoInverse, "furnace_dim", "furnace"},
+      {"mis_missing_density", EstimatorFault::kMisMissingDensity, "one_bounce_sphere", "one_bounce_sphere"},
+      {"nee_no_cosine", EstimatorFault::kNeeNoCosine, "one_bounce_sphere", "one_bounce_sphere"},
+      {"roulette_no_inverse", EstimatorFault::kRouletteNoInverse, "furnace_dim", "furnace"},
   };
   return c;
 }
@@ -209,12 +210,11 @@ CheckResult run_control(const CheckContext& ctx, const ControlCase& cc, const st
   const AnalyticScene scene = make_analytic(cc.world, sz.resolution, ac->max_depth);
   const std::string what = fmt::format("{} with fault {} on {}", integrator, cc.fault_name, scene.name);
   RenderSettings st = settings_for(ctx, ac->quick, ac->full, ac->max_depth, what, sample_factor(integrator));
-  st.fault = cc.fault;
-  if (cc.fault == IntegratorFault::kRouletteNoInverse) {
+  if (cc.fault == EstimatorFault::kRouletteNoInverse) {
     st.russian_roulette = true;
     st.rr_min_depth = 0;  // roulette from the first vertex: the missing 1/q biases every path
   }
-  return analytic_compare(integrator, scene, st, true, kAlpha, what);
+  return analytic_compare(broken_integrator_name(integrator, cc.fault), scene, st, true, kAlpha, what);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -266,8 +266,8 @@ std::shared_ptr<const RenderRun> scene_reference(const CheckContext& ctx, const 
 }
 
 CheckResult run_agreement(const CheckContext& ctx, const SceneCase& sc, const std::string& integrator,
-                          IntegratorFault fault = IntegratorFault::kNone) {
-  const bool control = fault != IntegratorFault::kNone;
+                          std::optional<EstimatorFault> fault = std::nullopt) {
+  const bool control = fault.has_value();
   const ImageSize& sz = ctx.full ? sc.full : sc.quick;
   const auto world = load_scene_at_resolution(sc.file, sz.resolution, sz.resolution);
   const std::string what = fmt::format("{} vs bdpt reference on {} ({}x{})", integrator, sc.key, sz.resolution,
@@ -280,8 +280,7 @@ CheckResult run_agreement(const CheckContext& ctx, const SceneCase& sc, const st
   // image is darker than its mean and the t-test rejects. It is cheap: 16x the samples.
   const int64_t factor = integrator == "pt" ? 16 : sample_factor(integrator);
   RenderSettings st = settings_for(ctx, sc.quick, sc.full, kSceneMaxDepth, what, factor);
-  st.fault = fault;
-  const RenderRun run = render_with(integrator, *world, st);
+  const RenderRun run = render_with(control ? broken_integrator_name(integrator, *fault) : integrator, *world, st);
   if (!run.ok()) return render_error_record(run, what);
   WelchImage a = run.film->welch(), b = ref->film->welch();
   int64_t excluded = 0;
@@ -309,7 +308,7 @@ CheckResult run_agreement(const CheckContext& ctx, const SceneCase& sc, const st
   r.samples = st.spp * run.film->pixel_count();
   r.details["render"] = run.summary();
   r.details["reference"] = ref->summary();
-  r.details["fault"] = int(fault);
+  r.details["fault"] = control ? fault_name(*fault) : "none";
   r.details["excluded_pixels"] = excluded;
   r.details["settings"] = {{"spp", st.spp}, {"passes", st.passes}, {"max_depth", st.max_depth}, {"seed", st.seed}};
   if (excluded > 0)
@@ -451,11 +450,10 @@ CheckResult run_technique_control(const CheckContext& ctx) {
   st.max_depth = 2;
   st.only_length = 2;
   st.only_s = 1;
-  st.fault = IntegratorFault::kNeeNoCosine;
   const std::string what = "bdpt technique s=1,t=2 without the NEE cosine on the furnace";
   st.seed = seed_for(ctx, what);
   a.name = "furnace, paths of 2 segments";
-  return analytic_compare("bdpt", a, st, true, kAlpha, what);
+  return analytic_compare(broken_integrator_name("bdpt", EstimatorFault::kNeeNoCosine), a, st, true, kAlpha, what);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -529,10 +527,9 @@ CheckResult run_convergence(const CheckContext& ctx, const std::string& integrat
     opt.seed = seed_for(ctx, integrator + w.label);
     opt.fit.confidence = 1.0 - stats::sidak_alpha(kAlpha, m);
     if (control) {
-      opt.base.fault = IntegratorFault::kRouletteNoInverse;
       opt.base.rr_min_depth = 0;
     }
-    const ImageConvergence cv = image_convergence(integrator, *w.world, w.truth, w.truth_variance, w.mask, opt);
+    const ImageConvergence cv = image_convergence(control ? broken_integrator_name(integrator, EstimatorFault::kRouletteNoInverse) : integrator, *w.world, w.truth, w.truth_variance, w.mask, opt);
     if (!cv.ok()) {
       r.passed = false;
       msgs += fmt::format("; {}: {}", w.label, cv.error);
@@ -610,14 +607,14 @@ const bool registered = [] {
                           "on cornell-box.json, alpha 0.01",
            .kind = CheckKind::kStatistical,
            .run = [](const CheckContext& c) {
-             return run_agreement(c, scene_cases()[0], "pt", IntegratorFault::kNeeNoCosine);
+             return run_agreement(c, scene_cases()[0], "pt", EstimatorFault::kNeeNoCosine);
            }});
   reg.add({.name = "integrator.agreement.control.lt_shading_correction_inverted",
            .description = "negative control: lt with the reciprocal of the adjoint BSDF's shading-normal factor "
                           "must be rejected against the bdpt reference on smooth-mesh.json, alpha 0.01",
            .kind = CheckKind::kStatistical,
            .run = [](const CheckContext& c) {
-             return run_agreement(c, scene_cases()[3], "lt", IntegratorFault::kShadingCorrectionInverted);
+             return run_agreement(c, scene_cases()[3], "lt", EstimatorFault::kShadingCorrectionInverted);
            }});
   for (int length = 2; length <= 4; ++length) {
     reg.add({.name = fmt::format("integrator.bdpt.techniques.furnace.length{}", length),
@@ -643,8 +640,7 @@ const bool registered = [] {
   // bdpt has no Russian roulette (lib/integrator/bdpt.cpp, paths end at max_depth): no control.
   for (const std::string integ : {"pt", "lt", "bdpt"})
     for (const auto& cc : control_cases()) {
-      if (integ == "lt" && cc.fault != IntegratorFault::kRouletteNoInverse) continue;
-      if (integ == "bdpt" && cc.fault == IntegratorFault::kRouletteNoInverse) continue;
+      if (!broken_integrator(integ, cc.fault)) continue;  // the integrator has no such term
       reg.add({.name = fmt::format("integrator.control.{}.{}", integ, cc.fault_name),
                .description = fmt::format("negative control: {} with the fault '{}' on the '{}' world must be "
                                           "rejected by the exact-image comparison, alpha 0.01",

@@ -16,6 +16,7 @@
 #include "lib/registry/integrator_registry.h"
 #include "lib/scene/scene_loader.h"
 #include "validate/stats/tests.h"
+#include "validate/render/broken_integrators.h"
 
 namespace tb {
 
@@ -36,15 +37,15 @@ std::string registered_integrator_names() {
 RenderRun render_with(const std::string& integrator, const World& world, const RenderSettings& settings) {
   RenderRun run;
   run.integrator = integrator;
-  const IntegratorInfo* info = find_integrator(integrator);
-  if (!info) {
+  const RenderFunction render = find_render_function(integrator);
+  if (!render) {
     run.error = fmt::format("integrator '{}' not registered (registered: {})", integrator, registered_integrator_names());
     return run;
   }
   run.film.emplace(world.camera().width(), world.camera().height());
   const auto t0 = std::chrono::steady_clock::now();
   try {
-    run.passes = info->render(world, settings, *run.film);
+    run.passes = render(world, settings, *run.film);
   } catch (const std::exception& e) {
     run.error = fmt::format("integrator '{}' threw: {}", integrator, e.what());
   }

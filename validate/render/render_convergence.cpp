@@ -9,6 +9,7 @@
 #include "lib/core/hash.h"
 #include "lib/film/film.h"
 #include "lib/registry/integrator_registry.h"
+#include "validate/render/broken_integrators.h"
 
 namespace tb {
 
@@ -16,8 +17,8 @@ ImageConvergence image_convergence(const std::string& integrator, const World& w
                                    const std::vector<Rgb>& truth_variance, const std::vector<bool>& mask,
                                    const ImageConvergenceOptions& opt) {
   ImageConvergence out;
-  const IntegratorInfo* info = find_integrator(integrator);
-  if (!info) {
+  const RenderFunction render = find_render_function(integrator);
+  if (!render) {
     out.error = fmt::format("integrator '{}' not registered", integrator);
     return out;
   }
@@ -37,7 +38,7 @@ ImageConvergence image_convergence(const std::string& integrator, const World& w
       Film film(world.camera().width(), world.camera().height());
       const auto t0 = std::chrono::steady_clock::now();
       try {
-        info->render(world, st, film);
+        render(world, st, film);
       } catch (const std::exception& e) {
         out.error = fmt::format("integrator '{}' threw: {}", integrator, e.what());
         return out;

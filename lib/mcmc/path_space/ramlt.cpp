@@ -5,6 +5,7 @@
 #include <cmath>
 #include <optional>
 #include <stdexcept>
+#include <type_traits>
 #include <utility>
 
 #include <nlohmann/json.hpp>
@@ -293,6 +294,32 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
       maps.leaf_boxes.push_back({lo[0], lo[1], hi[0], hi[1]});
     }
   return out;
+}
+
+RamltOptions apply_ramlt_params(RamltOptions o, const std::map<std::string, double>& params) {
+  const auto get = [&](const char* name, auto& field) {
+    const auto it = params.find(name);
+    if (it != params.end()) field = static_cast<std::remove_reference_t<decltype(field)>>(it->second);
+  };
+  get("grid", o.grid);
+  get("refine_every", o.refine_every);
+  get("split_threshold", o.split_threshold);
+  get("lambda0", o.adaptation.lambda0);
+  get("target_acceptance", o.adaptation.target_acceptance);
+  get("batch_steps", o.batch_steps);
+  if (o.grid < 1 || o.refine_every < 1 || o.split_threshold < 0 || o.batch_steps < 0 ||
+      !(o.adaptation.target_acceptance > 0.0 && o.adaptation.target_acceptance < 1.0))
+    throw std::invalid_argument("ramlt: grid, refine_every >= 1, split_threshold, batch_steps >= 0, 0 < a* < 1");
+  return o;
+}
+
+std::vector<std::pair<std::string, std::string>> ramlt_parameter_list() {
+  return {{"grid", "N_top: N x N screen cells of the grid partition (default 20, Otsu Sec. 8.1)"},
+          {"refine_every", "quadtree: mutations of all chains between refinements (default 1e7)"},
+          {"split_threshold", "quadtree: reports of a leaf above which it is split (default 5000)"},
+          {"lambda0", "initial lambda = log sigma^2 (default 1)"},
+          {"target_acceptance", "a* of Eq. 5 (default 0.5)"},
+          {"batch_steps", "steps per chain per synchronous batch (default 0: ceil(L regions / chains))"}};
 }
 
 void write_ramlt_maps(const RamltRegionMaps& m, const std::string& base) {

@@ -25,8 +25,10 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "estimators/mcmc/adaptation.h"
@@ -86,6 +88,13 @@ struct RamltStats {
 };
 
 RamltStats run_ramlt(const World& world, const RenderSettings& settings, Film& film, const RamltOptions& options = {});
+
+// The numeric options by name (`tb render --param NAME=VALUE`, RenderSettings::params): "grid"
+// (N_top), "refine_every" (M_refine), "split_threshold" (M_split), "lambda0", "target_acceptance"
+// (a*), "batch_steps"; names not listed are left to the caller's check (validate_params).
+RamltOptions apply_ramlt_params(RamltOptions o, const std::map<std::string, double>& params);
+// (name, description with its default) of each of them.
+std::vector<std::pair<std::string, std::string>> ramlt_parameter_list();
 
 // The maps next to an output: <base>.ramlt.json (every number) and <base>.ramlt_{lambda,
 // acceptance,visits}.png (film resolution, each pixel the value of its region, normalised to

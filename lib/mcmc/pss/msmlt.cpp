@@ -223,8 +223,7 @@ int64_t render_msmlt(const World& world, const RenderSettings& settings, const p
                      const pss::MultiStageSettings& ms, Film& film, pss::MultiStageStats* stats) {
   const LightSampler sampler(world);
   const PathContext ctx{&world, &sampler};
-  const pss::SampleFunction f = pss::bdpt_sample_function(ctx, film.width(), film.height(), settings.max_depth,
-                                                          settings.fault);
+  const pss::SampleFunction f = pss::bdpt_sample_function(ctx, film.width(), film.height(), settings.max_depth);
   return pss::run_msmlt(f, settings, p, ms, film, stats);
 }
 

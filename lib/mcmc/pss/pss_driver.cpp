@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <stdexcept>
 
 #include <fmt/format.h>
 
@@ -432,6 +433,19 @@ int64_t run_pss(const SampleFunction& f_in, const RenderSettings& st, const PssS
 
 namespace pss {
 
+void apply_params(const std::map<std::string, double>& params, PssSettings* p) {
+  for (const auto& [name, v] : params) {
+    if (name == "bootstrap" && v >= 1) p->bootstrap = static_cast<int64_t>(v);
+    else if (name == "chains" && v >= 1) p->chains = static_cast<int64_t>(v);
+    else if (name == "large_step" && v >= 0 && v <= 1) p->large_step_probability = v;
+    else if (name == "sigma" && v > 0 && v < 1) p->sigma = v;
+    else
+      throw std::invalid_argument(fmt::format("PSS parameter {} = {} is unknown or out of range (bootstrap >= 1, "
+                                              "chains >= 1, 0 <= large_step <= 1, 0 < sigma < 1)",
+                                              name, v));
+  }
+}
+
 void fill_report(const PssStats& s, RunReport* report, const char* small_step_name) {
   if (!report) return;
   (void)small_step_name;
@@ -447,8 +461,7 @@ int64_t render_pssmlt(const World& world, const RenderSettings& settings, const 
                       pss::PssStats* stats) {
   const LightSampler sampler(world);
   const PathContext ctx{&world, &sampler};
-  const pss::SampleFunction f = pss::bdpt_sample_function(ctx, film.width(), film.height(), settings.max_depth,
-                                                          settings.fault);
+  const pss::SampleFunction f = pss::bdpt_sample_function(ctx, film.width(), film.height(), settings.max_depth);
   return pss::run_pss(f, settings, p, film, stats);
 }
 
@@ -478,6 +491,7 @@ int64_t render_reported(Render render, const World& world, const RenderSettings&
                         Adjust adjust, const char* small_step_name = "small step") {
   pss::PssSettings p;
   adjust(p);
+  pss::apply_params(settings.params, &p);
   pss::PssStats stats;
   const int64_t passes = render(world, settings, p, film, &stats);
   pss::fill_report(stats, settings.report, small_step_name);

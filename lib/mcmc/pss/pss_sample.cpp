@@ -21,12 +21,11 @@ Vec2 raster_from(StreamUniforms& u, int width, int height) {
 
 }  // namespace
 
-SampleFunction bdpt_sample_function(const PathContext& ctx, int width, int height, int max_depth,
-                                    IntegratorFault fault) {
+SampleFunction bdpt_sample_function(const PathContext& ctx, int width, int height, int max_depth) {
   max_depth = std::max(0, max_depth);
   SampleFunction f;
   f.levels = 1;
-  f.sample = [ctx, width, height, max_depth, fault](int, StreamUniforms& u, std::vector<Splat>* out) {
+  f.sample = [ctx, width, height, max_depth](int, StreamUniforms& u, std::vector<Splat>* out) {
     thread_local std::vector<PathVertex> cam, light;
     u.use_stream(kCameraStream);
     const Vec2 raster = raster_from(u, width, height);
@@ -39,7 +38,7 @@ SampleFunction bdpt_sample_function(const PathContext& ctx, int width, int heigh
     for (int t = 1; t <= nc; ++t)
       for (int s = 0; s <= nl; ++s) {
         if (s + t < 2 || s + t - 2 > max_depth) continue;
-        const Connection c = connect_bdpt(ctx, light, cam, s, t, u, fault);
+        const Connection c = connect_bdpt(ctx, light, cam, s, t, u);
         if (is_black(c.value)) continue;
         if (t == 1)
           out->push_back({c.raster, c.value, SplatPath{&light, &cam, s, t}});

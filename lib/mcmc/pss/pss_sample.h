@@ -55,8 +55,7 @@ double target_value(const std::vector<Splat>& splats);
 // stream), every connection (s, t) with s + t - 2 <= max_depth and t >= 1, power-heuristic
 // weighted (connection stream). Connections with t >= 2 are summed into one splat at the camera
 // raster; each t = 1 connection is its own splat at the raster it reaches.
-SampleFunction bdpt_sample_function(const PathContext& ctx, int width, int height, int max_depth,
-                                    IntegratorFault fault = IntegratorFault::kNone);
+SampleFunction bdpt_sample_function(const PathContext& ctx, int width, int height, int max_depth);
 
 // MMLT (Hachisuka, Kaplanyan & Dachsbacher 2014, Sec. 4): level l is the path length k = l + 1
 // segments (l = 0 .. max_depth). The first connection-stream uniform picks the technique
