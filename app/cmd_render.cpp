@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -15,6 +16,7 @@
 #include "lib/core/parallel.h"
 #include "lib/film/exr_io.h"
 #include "lib/film/png_preview.h"
+#include "lib/mcmc/path_space/ramlt.h"
 #include "lib/registry/integrator_registry.h"
 #include "lib/scene/scene_loader.h"
 
@@ -59,6 +61,11 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     fmt::print(stderr, "tb render: {}\n", err);
     return 2;
   }
+  const bool ramlt = a.integrator.rfind("ramlt-", 0) == 0;
+  if (!a.partition.empty() && !ramlt) {
+    fmt::print(stderr, "tb render: --partition applies to the ramlt-* integrators only\n");
+    return 2;
+  }
   const auto t_load = std::chrono::steady_clock::now();
   std::unique_ptr<World> world = load_scene_file(a.scene, a.resolution);
   const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count();
@@ -92,7 +99,23 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   ThreadLimit limit(static_cast<size_t>(std::max(0, a.threads)));
   Film film(world->camera().width(), world->camera().height());
   const auto t0 = std::chrono::steady_clock::now();
-  const int64_t passes = integ->render(*world, st, film);
+  // ramlt-*: the driver directly, for the partition option and the per-region maps.
+  std::optional<path_space::RamltRegionMaps> ramlt_maps;
+  int64_t passes = 0;
+  if (ramlt) {
+    path_space::RamltOptions ro;
+    if (a.integrator == "ramlt-multichain") ro.perturbation = path_space::RamltPerturbation::kMultiChain;
+    if (!a.partition.empty()) ro.partition = a.partition;
+    ro = path_space::apply_ramlt_params(ro, st.params);
+    const path_space::RamltStats rs = path_space::run_ramlt(*world, st, film, ro);
+    for (const auto& m : rs.mlt.mutations) report.mutations.push_back({m.name, m.proposed, m.accepted, m.errors});
+    report.mutations_total = rs.mlt.mutations_total;
+    report.mutations_per_second = rs.mlt.mutations_per_second();
+    ramlt_maps = rs.maps;
+    passes = rs.mlt.chains;
+  } else {
+    passes = integ->render(*world, st, film);
+  }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   line.finish();
 
@@ -122,6 +145,13 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     rec["mutations"] = m;
     rec["mutations_total"] = report.mutations_total;
     rec["mutations_per_second"] = report.mutations_per_second;
+  }
+  if (ramlt_maps) {
+    const std::string base = std::filesystem::path(a.out).replace_extension("").string();
+    path_space::write_ramlt_maps(*ramlt_maps, base);
+    rec["ramlt_maps"] = base + ".ramlt.json";
+    rec["partition"] = ramlt_maps->partition;
+    rec["ramlt_regions"] = ramlt_maps->regions;
   }
   write_file_atomic(std::filesystem::path(a.out).replace_extension(".json").string(), rec.dump(1));
   fmt::print("{}: {}x{}, {} passes, {} spp in {:.2f} s ({:.3g} samples/s); {} non-finite samples rejected\n", a.out,

@@ -21,6 +21,7 @@ struct RenderArgs {
   std::string resolution;   // "WxH": overrides the camera resolution of the scene file
   bool no_progress = false;
   bool list = false;
+  std::string partition;    // ramlt-*: fixed | global | grid | quadtree (default grid)
   std::vector<std::string> params;  // NAME=VALUE, integrator parameters
 };
 

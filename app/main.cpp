@@ -196,6 +196,8 @@ int main(int argc, char** argv) {
   render->add_option("--resolution", rargs.resolution, "WxH: override the scene camera's resolution");
   render->add_option("--param", rargs.params,
                      "NAME=VALUE: an integrator parameter (repeatable; --list shows each integrator's)");
+  render->add_option("--partition", rargs.partition,
+                     "ramlt-lens / ramlt-multichain: region partition of the adaptation (fixed, global, grid, quadtree; default grid)");
   render->add_flag("--list", rargs.list, "List the integrators and exit");
   render->add_flag("--no-progress", rargs.no_progress, "No progress line on stderr");
 

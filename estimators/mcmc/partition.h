@@ -6,7 +6,11 @@
 //  - FixedPartition:  one region and no adaptation (the scale stays at lambda0);
 //  - GlobalPartition: one region, adapted (the adaptive scaling of Andrieu & Thoms 2008);
 //  - GridPartition:   a regular grid over a box of R^d; states outside the box fall in the
-//                     nearest boundary cell, so the cells cover R^d.
+//                     nearest boundary cell, so the cells cover R^d;
+//  - QuadtreePartition (2d only, "quadtree"): the leaves of a quadtree over a box of R^2 (Otsu et
+//                     al., Sec. 6.1-6.2), one region at first; split(leaf) refines a leaf into four
+//                     (the driver decides when: Otsu Sec. 6.2, visits above M_split). States
+//                     outside the box fall in the nearest boundary leaf.
 #pragma once
 
 #include <algorithm>
@@ -19,6 +23,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace tb::mcmc {
 
@@ -94,7 +99,72 @@ class GridPartition final : public RegionPartition<std::array<double, N>> {
   std::array<int, N> cells_;
 };
 
+// Otsu et al., Sec. 6.2: regions are the leaves; initially the root (the whole box). Splitting leaf
+// r keeps index r for its first child (lower x, lower y) and appends the other three as regions
+// regions() .. regions() + 2, so the indices of all other leaves stay valid.
+class QuadtreePartition final : public RegionPartition<std::array<double, 2>> {
+ public:
+  using State = std::array<double, 2>;
+  QuadtreePartition(State lo, State hi, int max_depth = 12) : max_depth_(max_depth) {
+    if (!(hi[0] > lo[0]) || !(hi[1] > lo[1])) throw std::invalid_argument("QuadtreePartition: empty box");
+    nodes_.push_back({lo, hi, {-1, -1, -1, -1}, 0, 0});
+    leaf_node_.push_back(0);
+  }
+  std::string name() const override { return "quadtree"; }
+  int regions() const override { return static_cast<int>(leaf_node_.size()); }
+  int region_of(const State& x) const override {
+    int n = 0;
+    while (nodes_[static_cast<size_t>(n)].child[0] >= 0) n = nodes_[static_cast<size_t>(n)].child[quadrant(n, x)];
+    return nodes_[static_cast<size_t>(n)].leaf;
+  }
+  bool adapts() const override { return true; }
+  int depth(int leaf) const { return nodes_[static_cast<size_t>(leaf_node_[static_cast<size_t>(leaf)])].depth; }
+  State lo(int leaf) const { return nodes_[static_cast<size_t>(leaf_node_[static_cast<size_t>(leaf)])].lo; }
+  State hi(int leaf) const { return nodes_[static_cast<size_t>(leaf_node_[static_cast<size_t>(leaf)])].hi; }
+  bool can_split(int leaf) const { return depth(leaf) < max_depth_; }
+  // Splits a leaf into four; returns the index of the first appended region (-1: at max depth).
+  int split(int leaf) {
+    if (!can_split(leaf)) return -1;
+    const int n = leaf_node_[static_cast<size_t>(leaf)];
+    const Node parent = nodes_[static_cast<size_t>(n)];
+    const State mid{0.5 * (parent.lo[0] + parent.hi[0]), 0.5 * (parent.lo[1] + parent.hi[1])};
+    const int first_new = regions();
+    for (int q = 0; q < 4; ++q) {
+      Node c;
+      c.lo = {q & 1 ? mid[0] : parent.lo[0], q & 2 ? mid[1] : parent.lo[1]};
+      c.hi = {q & 1 ? parent.hi[0] : mid[0], q & 2 ? parent.hi[1] : mid[1]};
+      c.depth = parent.depth + 1;
+      c.leaf = q == 0 ? leaf : first_new + q - 1;
+      const int id = static_cast<int>(nodes_.size());
+      nodes_.push_back(c);
+      nodes_[static_cast<size_t>(n)].child[q] = id;
+      if (q == 0)
+        leaf_node_[static_cast<size_t>(leaf)] = id;
+      else
+        leaf_node_.push_back(id);
+    }
+    nodes_[static_cast<size_t>(n)].leaf = -1;
+    return first_new;
+  }
+
+ private:
+  struct Node {
+    State lo{}, hi{};
+    std::array<int, 4> child{-1, -1, -1, -1};  // quadrant q: bit 0 upper x half, bit 1 upper y half
+    int leaf = -1;                              // region index of a leaf
+    int depth = 0;
+  };
+  int quadrant(int n, const State& x) const {
+    const Node& nd = nodes_[static_cast<size_t>(n)];
+    return (x[0] >= 0.5 * (nd.lo[0] + nd.hi[0]) ? 1 : 0) + (x[1] >= 0.5 * (nd.lo[1] + nd.hi[1]) ? 2 : 0);
+  }
+  int max_depth_;
+  std::vector<Node> nodes_;
+  std::vector<int> leaf_node_;
+};
+
 static_assert(Partition<FixedPartition<1>> && Partition<GlobalPartition<2>> && Partition<GridPartition<2>>);
+static_assert(Partition<QuadtreePartition>);
 static_assert(Partition<RegionPartition<std::array<double, 1>>>);
 
 // What a registered partition is built from: a box of R^N and cells per dimension (used by the
@@ -108,14 +178,20 @@ struct PartitionBox {
 template <size_t N>
 using PartitionFactory = std::function<std::shared_ptr<const RegionPartition<std::array<double, N>>>(const PartitionBox<N>&)>;
 
-// The partitions by name: "fixed", "global", "grid". register_partition adds one at run time.
+// The partitions by name: "fixed", "global", "grid" (and, in 2d, "quadtree": the root alone; its
+// refinement needs the non-const QuadtreePartition). register_partition adds one at run time.
 template <size_t N>
 std::map<std::string, PartitionFactory<N>>& partition_registry() {
-  static std::map<std::string, PartitionFactory<N>> r = {
-      {"fixed", [](const PartitionBox<N>&) { return std::make_shared<const FixedPartition<N>>(); }},
-      {"global", [](const PartitionBox<N>&) { return std::make_shared<const GlobalPartition<N>>(); }},
-      {"grid", [](const PartitionBox<N>& b) { return std::make_shared<const GridPartition<N>>(b.lo, b.hi, b.cells); }},
-  };
+  static std::map<std::string, PartitionFactory<N>> r = [] {
+    std::map<std::string, PartitionFactory<N>> m = {
+        {"fixed", [](const PartitionBox<N>&) { return std::make_shared<const FixedPartition<N>>(); }},
+        {"global", [](const PartitionBox<N>&) { return std::make_shared<const GlobalPartition<N>>(); }},
+        {"grid", [](const PartitionBox<N>& b) { return std::make_shared<const GridPartition<N>>(b.lo, b.hi, b.cells); }},
+    };
+    if constexpr (N == 2)
+      m["quadtree"] = [](const PartitionBox<N>& b) { return std::make_shared<const QuadtreePartition>(b.lo, b.hi); };
+    return m;
+  }();
   return r;
 }
 template <size_t N>

@@ -8,12 +8,19 @@
 #include "lib/integrator/light_tracer.h"
 #include "lib/integrator/path_tracer.h"
 #include "lib/mcmc/path_space/mlt.h"
+#include "lib/mcmc/path_space/ramlt.h"
 #include "lib/mcmc/pss/msmlt.h"
 #include "lib/mcmc/pss/pss_driver.h"
 
 namespace tb {
 
 namespace {
+
+std::vector<IntegratorParameter> ramlt_parameters() {
+  std::vector<IntegratorParameter> out;
+  for (const auto& [name, description] : path_space::ramlt_parameter_list()) out.push_back({name, description});
+  return out;
+}
 
 std::vector<IntegratorParameter> pss_parameters() {
   return {{"bootstrap", "bootstrap samples per pass (default: PssSettings::bootstrap_for)"},
@@ -52,6 +59,20 @@ const std::vector<IntegratorInfo>& integrators() {
          [](const World& w, const RenderSettings& s, Film& f) { return render_lt(w, s, f); }},
         {"mlt", "Veach's path-space MLT: bidirectional mutation, lens and caustic perturbations through specular chains (pinhole)",
          [](const World& w, const RenderSettings& s, Film& f) { return render_mlt(w, s, f); }},
+        {"ramlt-lens", "regional adaptive MLT (Otsu et al.): bidirectional mutation + regional adaptive lens "
+         "perturbation, 20 x 20 screen grid, adapted in synchronous batches (pinhole; tb render --partition)",
+         [](const World& w, const RenderSettings& s, Film& f) {
+           return render_ramlt(w, s, f, path_space::apply_ramlt_params({}, s.params));
+         },
+         ramlt_parameters()},
+        {"ramlt-multichain", "regional adaptive MLT (Otsu et al.): bidirectional mutation + regional adaptive "
+         "multi-chain perturbation, 20 x 20 screen grid, adapted in synchronous batches (pinhole; tb render --partition)",
+         [](const World& w, const RenderSettings& s, Film& f) {
+           path_space::RamltOptions o;
+           o.perturbation = path_space::RamltPerturbation::kMultiChain;
+           return render_ramlt(w, s, f, path_space::apply_ramlt_params(o, s.params));
+         },
+         ramlt_parameters()},
         {"mmlt", "multiplexed MLT (Hachisuka et al. 2014): primary-sample-space chains per path length over single BDPT techniques",
          [](const World& w, const RenderSettings& s, Film& f) { return render_mmlt(w, s, f); }, pss_parameters()},
         {"pssmlt", "primary sample space MLT (Kelemen et al. 2002) over BDPT: large and small steps, expected-value splats",

@@ -85,7 +85,10 @@ TEST(McmcPartition, GridCellsCoverSpaceAndRegistryBuildsVariants) {
   EXPECT_TRUE(make_partition<2>("global", box)->adapts());
   EXPECT_FALSE(make_partition<2>("fixed", box)->adapts());
   EXPECT_EQ(make_partition<2>("fixed", box)->name(), "fixed");
-  EXPECT_THROW(make_partition<2>("quadtree", box), std::invalid_argument);
+  // The quadtree is registered in 2d only (the root: one region; its refinement is the driver's).
+  EXPECT_EQ(make_partition<2>("quadtree", box)->regions(), 1);
+  EXPECT_THROW(make_partition<1>("quadtree", PartitionBox<1>{{0.0}, {1.0}, {1}}), std::invalid_argument);
+  EXPECT_THROW(make_partition<2>("octree", box), std::invalid_argument);
 }
 
 // T(x -> y) uses sigma(region(x)), T(y -> x) sigma(region(y)): the Hastings ratio carries both.

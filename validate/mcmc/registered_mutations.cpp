@@ -112,7 +112,7 @@ CheckResult path_registered_mutations_pairwise(const CheckContext& ctx, const st
     CheckResult last;
     for (size_t b = 0; b < boxes.size(); ++b) {
       const PathContext& pc = boxes[b]->ctx;
-      PathMutationList list = make_path_mutations(pc, ms);
+      PathMutationList list = make_all_path_mutations(pc, ms);
       // The reference is that of the registered mutation; a wrapper (negative control) is checked
       // against it, so a density it misstates is seen.
       const auto ref_one = reference_density_of(*list[i], pc);

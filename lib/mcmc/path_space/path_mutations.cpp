@@ -7,6 +7,7 @@
 #include "lib/mcmc/path_space/caustic_perturbation.h"
 #include "lib/mcmc/path_space/lens_perturbation.h"
 #include "lib/mcmc/path_space/multi_chain_perturbation.h"
+#include "lib/mcmc/path_space/ramlt_perturbations.h"
 
 namespace tb::path_space {
 
@@ -29,6 +30,20 @@ std::shared_ptr<const PathMutation> make_multi(const PathContext& ctx, const Pat
       [](const MultiChainPerturbation&, const MltPath& x) { return !multi_chain_levels(x).empty(); });
 }
 
+// The 20 x 20 screen grid of Otsu et al., Sec. 8.1, frozen at lambda = -6 (sigma = 0.05 rad): the
+// registry's instances do not adapt, and at Otsu's lambda0 = 1 (sigma = 1.65 rad) almost every
+// multi-chain proposal fails; the driver of ramlt.h builds its own, from lambda0 = 1, with live scales.
+constexpr double kRegistryLambda = -6.0;
+std::shared_ptr<const PathMutation> make_ramlt_lens(const PathContext& ctx, const PathMutationSettings&, double w) {
+  return std::make_shared<const RamltLensMutation>(
+      "ramlt-lens", w, RamltLensPerturbation(ctx, RegionalScale::uniform(ScreenPartition::make(ctx, "grid", 20), kRegistryLambda)));
+}
+std::shared_ptr<const PathMutation> make_ramlt_multi(const PathContext& ctx, const PathMutationSettings&, double w) {
+  return std::make_shared<const RamltMultiChainMutation>(
+      "ramlt-multichain", w,
+      RamltMultiChainPerturbation(ctx, RegionalScale::uniform(ScreenPartition::make(ctx, "grid", 20), kRegistryLambda)));
+}
+
 std::vector<PathMutationInfo>& table() {
   static std::vector<PathMutationInfo> t = {
       {"bidirectional", "delete a subpath, regenerate it from both ends (Veach 1997, Sec. 11.4.2)", 0.4, make_bidir},
@@ -37,6 +52,10 @@ std::vector<PathMutationInfo>& table() {
        make_caustic},
       {"multi-chain", "lens perturbation continued through several specular chains (Veach 1997, Sec. 11.4.3)", 0.2,
        make_multi},
+      {"ramlt-lens", "regional adaptive lens perturbation: truncated-normal primary direction, sigma of the screen "
+       "region (Otsu et al., Sec. 3, 5)", 0.5, make_ramlt_lens, false},
+      {"ramlt-multichain", "regional adaptive multi-chain perturbation: truncated-normal directions, sigma of the "
+       "screen region (Otsu et al., Sec. 3, 5)", 0.5, make_ramlt_multi, false},
   };
   return t;
 }
@@ -52,6 +71,13 @@ void register_path_mutation(PathMutationInfo info) { mcmc::add_named(table(), st
 void unregister_path_mutation(const std::string& name) { mcmc::remove_named(table(), name); }
 
 PathMutationList make_path_mutations(const PathContext& ctx, const PathMutationSettings& s) {
+  PathMutationList out;
+  for (const auto& m : table())
+    if (m.in_default_mixture) out.push_back(m.make(ctx, s, m.weight));
+  return out;
+}
+
+PathMutationList make_all_path_mutations(const PathContext& ctx, const PathMutationSettings& s) {
   PathMutationList out;
   for (const auto& m : table()) out.push_back(m.make(ctx, s, m.weight));
   return out;

@@ -12,6 +12,10 @@
 // proposals fail where they cannot act). Since c_j depends on the path, c_j(y) / c_j(x) enters the
 // acceptance of moves that change the length or the specular structure.
 //
+// Otsu et al.'s regional adaptive lens and multi-chain perturbations (ramlt_perturbations.h) are
+// registered too ("ramlt-lens", "ramlt-multichain", weight 0.5 as in Otsu Sec. 8.1), outside the
+// default mixture; built from the registry they use the 20 x 20 grid with every lambda frozen at -6.
+//
 // Adding a mutation: a Proposal class in its own file and one line in the table of
 // path_mutations.cpp (or register_path_mutation at run time).
 #pragma once
@@ -62,6 +66,10 @@ struct PathMutationInfo {
   std::string description;
   double weight = 1.0;  // default selection weight
   std::shared_ptr<const PathMutation> (*make)(const PathContext&, const PathMutationSettings&, double weight);
+  // false: registered (checked by every registered-mutation check) but not part of Veach's mixture
+  // that make_path_mutations builds for run_mlt (the regional adaptive perturbations of
+  // ramlt_perturbations.h, run by their own driver, ramlt.h).
+  bool in_default_mixture = true;
 };
 
 // Every registered mutation, in selection order.
@@ -71,7 +79,9 @@ const PathMutationInfo* find_path_mutation(const std::string& name);
 void register_path_mutation(PathMutationInfo info);
 // Removes a mutation registered at run time (tests that register one clean up after themselves).
 void unregister_path_mutation(const std::string& name);
-// The registered mutations built for a context (every one with its default weight).
+// The registered mutations of the default mixture built for a context (each with its default weight).
 PathMutationList make_path_mutations(const PathContext& ctx, const PathMutationSettings& s);
+// Every registered mutation, in the order of path_mutations(), default mixture or not.
+PathMutationList make_all_path_mutations(const PathContext& ctx, const PathMutationSettings& s);
 
 }  // namespace tb::path_space
