@@ -17,6 +17,7 @@
 #include "lib/core/parallel.h"
 #include "lib/film/png_preview.h"
 #include "lib/mcmc/path_space/bidirectional_mutation.h"
+#include "lib/mcmc/path_space/mlt_chain.h"
 #include "lib/mcmc/path_space/ramlt_adaptation.h"
 #include "lib/mcmc/path_space/ramlt_perturbations.h"
 #include "lib/mcmc/path_space/start_paths.h"
@@ -24,56 +25,6 @@
 namespace tb::path_space {
 
 namespace {
-
-// One chain on paths as the ScoredChain of chain_step.h (the chain of mlt.cpp): x with f(x) and
-// pi(x) = Y(f(x)) cached, the proposal scored once; selection weights of x cached while current.
-struct RamltChain {
-  const PathMixture* mix = nullptr;
-  const PathTarget* target = nullptr;
-  MltPath x;
-  Rgb fx{0.0};
-  double pix = 0.0;
-  std::optional<MltPath> y;
-  Rgb fy{0.0};
-  double piy = 0.0;
-  std::vector<double> wx, wy;
-  double sum_x = 0.0, sum_y = 0.0;
-  bool y_weighed = false;
-
-  void start() { sum_x = mix->weights(x, &wx); }
-  int select(double v) const { return PathMixture::select_from(wx, sum_x, v); }
-  bool propose(int k, Uniforms& u) {
-    y_weighed = false;
-    y = mix->propose(k, x, u);
-    if (!y) return false;
-    fy = target->contribution(*y);
-    piy = std::max(0.0, luminance(fy));
-    return true;
-  }
-  mcmc::MoveTerms terms(int k) {
-    const size_t j = static_cast<size_t>(k);
-    const double cx = sum_x > 0.0 && wx[j] > 0.0 ? wx[j] / sum_x : 0.0;
-    double cy = 0.0;
-    if (piy > 0.0) {
-      sum_y = mix->weights(*y, &wy);
-      y_weighed = true;
-      cy = sum_y > 0.0 && wy[j] > 0.0 ? wy[j] / sum_y : 0.0;
-    }
-    return mcmc::mixture_terms(*mix, k, x, *y, pix, piy, cx, cy);
-  }
-  void accept() {
-    x = std::move(*y);
-    fx = fy;
-    pix = piy;
-    if (y_weighed) {
-      std::swap(wx, wy);
-      sum_x = sum_y;
-    } else {
-      start();
-    }
-  }
-  void reject() {}
-};
 
 struct Observation {
   int region;
@@ -149,7 +100,7 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
   rng.reserve(n);
   for (size_t c = 0; c < n; ++c) rng.push_back(Rng::for_sample(st.seed, hash_string("ramlt.chain"), c));
   std::vector<double> b(n, 0.0);
-  std::vector<RamltChain> chain(n);
+  std::vector<MltChain> chain(n);
   std::vector<char> alive(n, 0);
   std::vector<SplatBuffer> splats(n, SplatBuffer(film.width(), film.height()));
   std::vector<std::vector<mcmc::ComponentCounts>> local(n, std::vector<mcmc::ComponentCounts>(K));
@@ -158,7 +109,7 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
     ChainStart s = start_chain(ctx, st.seed, c, n_boot, max_depth, u.next());
     b[c] = s.b;
     if (!s.x) return;
-    RamltChain& ch = chain[c];
+    MltChain& ch = chain[c];
     ch.mix = &mixture;
     ch.target = &target;
     ch.x = std::move(*s.x);
@@ -178,7 +129,7 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
     parallel_for(n, [&](size_t c) {
       obs[c].clear();
       if (!alive[c]) return;
-      RamltChain& ch = chain[c];
+      MltChain& ch = chain[c];
       RngUniforms u(rng[c]);
       auto& ls = local[c];
       int rx = -1;  // region of the current path, recomputed after an accepted move
