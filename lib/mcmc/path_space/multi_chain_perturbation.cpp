@@ -9,8 +9,6 @@
 
 namespace tb::path_space {
 
-namespace {
-
 // The direction from the apex at x_i (spawn_ray's origin towards x_{i-1}) to x_{i-1}.
 Vec3 apex_direction(const MltPath& x, int i) {
   const Vec3 o = spawn_ray(x.v[i].hit, direction(x.v[i], x.v[i - 1])).o;
@@ -32,8 +30,6 @@ bool trace_chain(const PathContext& ctx, const MltPath& x, MltPath& y, int i, Ve
   }
   return !is_dirac_surface(y.v[stop]);
 }
-
-}  // namespace
 
 std::vector<int> MultiChainPerturbation::levels(const MltPath& x) const {
   if (!ctx_->world->camera().lens_is_delta()) return {};

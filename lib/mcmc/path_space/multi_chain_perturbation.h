@@ -54,4 +54,11 @@ class MultiChainPerturbation {
   double theta1_, theta2_;
 };
 
+// Shared with the regional adaptive multi-chain perturbation (ramlt_perturbations.cpp):
+// the direction from the apex at x_i (spawn_ray's origin towards x_{i-1}) to x_{i-1};
+Vec3 apex_direction(const MltPath& x, int i);
+// traces from y_i (already placed) along w through the specular chain of x below i (lobes kept)
+// to the next non-specular index `stop`, filling y_{i-1} .. y_stop; false when the chain changes.
+bool trace_chain(const PathContext& ctx, const MltPath& x, MltPath& y, int i, Vec3 w, int stop);
+
 }  // namespace tb::path_space

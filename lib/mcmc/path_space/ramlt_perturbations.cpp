@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "lib/geometry/spawn.h"
+#include "lib/mcmc/path_space/multi_chain_perturbation.h"
 #include "lib/mcmc/path_space/ramlt_direction.h"
 #include "lib/path/dirac.h"
 #include "lib/path/measure.h"
@@ -11,29 +12,6 @@
 namespace tb::path_space {
 
 namespace {
-
-// The direction from the apex at x_i (spawn_ray's origin towards x_{i-1}) to x_{i-1}.
-Vec3 apex_direction(const MltPath& x, int i) {
-  const Vec3 o = spawn_ray(x.v[i].hit, direction(x.v[i], x.v[i - 1])).o;
-  return glm::normalize(x.v[i - 1].hit.p - o);
-}
-
-// Traces from y_i (placed) along w through the specular chain of x below i (lobes kept) to the
-// next non-specular index `stop`; fills y_{i-1} .. y_stop. False when the chain changes
-// (multi_chain_perturbation.cpp traces the same way).
-bool trace_chain(const PathContext& ctx, const MltPath& x, MltPath& y, int i, Vec3 w, int stop) {
-  for (int c = i; c > stop; --c) {
-    const auto h = ctx.world->geometry().intersect(spawn_ray(y.v[c].hit, w));
-    if (!h) return false;
-    y.v[c - 1] = surface_vertex(ctx, *h);
-    if (c - 1 == stop) break;
-    if (!is_dirac_surface(y.v[c - 1])) return false;
-    const auto s = dirac_lobe_sample(y.v[c - 1], -w, transmits_from_camera_side(x, c - 1), TransportMode::kRadiance);
-    if (!s) return false;
-    w = s->wi;
-  }
-  return !is_dirac_surface(y.v[stop]);
-}
 
 // The first chain from the camera along w: y_{k-1} and, through the specular chain of x, down to
 // y_stop (non-specular). False when the chain changes or the ray escapes.
