@@ -33,7 +33,7 @@ struct Fig1Bottom {
 Fig1Bottom make_fig1_bottom(int pdf_cost_repeats = 0);
 
 // Exact variance of the reference MIS (balance heuristic, exact marginals by quadrature) with
-// counts[i] samples from technique i of the bottom set (VALIDATION.md B).
+// counts[i] samples from technique i of the bottom set (docs/validation.md B).
 double fig1_bottom_reference_variance(const Fig1Bottom& b, const std::vector<int>& counts);
 
 }  // namespace tb

@@ -1,4 +1,4 @@
-// Exact variances of classical estimators of ∫_0^1 f by quadrature (VALIDATION.md B: the reference
+// Exact variances of classical estimators of ∫_0^1 f by quadrature (docs/validation.md B: the reference
 // MIS variance). For multi-sample MIS with the balance heuristic and n_i samples from p_i
 // (Veach 1997, Eq. 9.4 with w_i = n_i p_i / P, P = Σ_k n_k p_k):
 //   F = Σ_i Σ_j f(x_ij) / P(x_ij),   Var F = Σ_i n_i ( ∫ f² p_i / P² dx − (∫ f p_i / P dx)² ).

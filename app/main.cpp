@@ -164,7 +164,7 @@ int main(int argc, char** argv) {
   auto* check = app.add_subcommand("check", "Run validation checks; exits non-zero when a check fails");
   check->add_option("names", ca.names, "Checks to run: full names, group prefixes (core.warp) or globs (*chi2)");
   auto* q = check->add_flag("--quick", ca.quick, "Quick sample sizes (default)");
-  check->add_flag("--full", ca.full, "Full sample sizes of VALIDATION.md")->excludes(q);
+  check->add_flag("--full", ca.full, "Full sample sizes of docs/validation.md")->excludes(q);
   check->add_option("--seed", ca.seed, "Run seed; each check derives its own scrambled seed from it");
   check->add_option("--out", ca.out, "Output folder for results.json, records/ and index.html")->capture_default_str();
   check->add_option("--attempt", ca.attempt, "Run the k-th rerun directly (fresh seed, 4x samples); for reproducers")

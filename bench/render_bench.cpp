@@ -1,4 +1,4 @@
-// Rendering throughput against the ray-tracing limit (issue 5, "Speed"), in one run:
+// Rendering throughput against the ray-tracing limit, in one run:
 //  - BM_RawIntersect / BM_RawOccluded: raw Embree on the Cornell box (scenes/cornell-box.json):
 //    incoherent float rays, origins uniform in the bounding box of the geometry and directions
 //    uniform on the sphere (so that, as for path-traced rays, most of them hit a wall),

@@ -1,5 +1,5 @@
 // The record every registered check produces (ARCHITECTURE.md: "the registry of named checks
-// that tb check runs"; VALIDATION.md: stated alpha, sample counts, seed, reproducer).
+// that tb check runs"; docs/validation.md: stated alpha, sample counts, seed, reproducer).
 #pragma once
 
 #include <cstdint>

@@ -1,4 +1,4 @@
-// Comparison of two images of Welch samples (Jung, Hanika & Dachsbacher 2020; VALIDATION.md A).
+// Comparison of two images of Welch samples (Jung, Hanika & Dachsbacher 2020; docs/validation.md A).
 // Per pixel and channel, Welch's two-sample t-test of the means of the Welch samples
 // (validate/stats welch_t_test; one-sample t-test when one image has fewer than two Welch
 // samples there, i.e. is a known reference). Three tests, each at alpha_each =

@@ -14,7 +14,7 @@ namespace tb {
 
 struct CheckContext {
   uint64_t seed = 1;         // run seed; derive streams with Rng::for_sample(seed, key, i)
-  bool full = false;         // --full: the larger sample sizes of VALIDATION.md
+  bool full = false;         // --full: the larger sample sizes of docs/validation.md
   double sample_scale = 1.0; // multiplier on sample counts (the runner's 4x rerun uses 4)
   // Reports progress in [0, 1]; may be called from any thread.
   std::function<void(double)> progress = [](double) {};

@@ -63,7 +63,7 @@ nlohmann::json run_one(const Check& check, const RunOptions& opt) {
     rec["passed"] = true;
     rec["verdict"] = "pass";
   } else if (check.kind == CheckKind::kStatistical && opt.attempt == 0) {
-    // VALIDATION.md: rerun once with a fresh seed and 4x the samples; fail only if that rejects too.
+    // docs/validation.md: rerun once with a fresh seed and 4x the samples; fail only if that rejects too.
     const CheckResult rerun = run_attempt(check, opt, 1);
     rec["rerun"] = rerun;
     rec["passed"] = rerun.passed;

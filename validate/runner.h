@@ -1,4 +1,4 @@
-// Runs registered checks the way VALIDATION.md prescribes: a scrambled seed per check
+// Runs registered checks the way docs/validation.md prescribes: a scrambled seed per check
 // (hash of the run seed and the check's name), a rerun with a fresh seed and 4x the samples
 // when a statistical check rejects (fail only if the rerun rejects too, report both), one
 // record per check written atomically as soon as it finishes (so an interrupted run loses

@@ -1,6 +1,6 @@
 // A finite toy state space {0, ..., n-1} with arbitrary (hashed, unnormalised) weights pi_i, and
 // proposals on it whose transition probabilities are exact: the space on which the transition
-// matrix of a kernel is built and checked exactly (VALIDATION.md E). Measure: counting measure;
+// matrix of a kernel is built and checked exactly (docs/validation.md E). Measure: counting measure;
 // every "density" here is a probability mass.
 #pragma once
 

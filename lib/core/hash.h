@@ -1,4 +1,4 @@
-// 64-bit hashing used to derive scrambled, counter-based seeds (VALIDATION.md, "Budget,
+// 64-bit hashing used to derive scrambled, counter-based seeds (docs/validation.md, "Budget,
 // seeds and determinism"): a seed is a pure function of (run seed, stream key, index), never
 // of a thread id or of time.
 #pragma once

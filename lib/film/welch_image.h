@@ -1,4 +1,4 @@
-// An image of Welch samples (Jung, Hanika & Dachsbacher 2020; VALIDATION.md A): per pixel and
+// An image of Welch samples (Jung, Hanika & Dachsbacher 2020; docs/validation.md A): per pixel and
 // channel the sum and the sum of squares of n Welch samples, a Welch sample being the average
 // of several raw samples (one film pass). From these, the per-pixel mean and the unbiased
 // sample variance of the Welch samples, which Welch's t-test compares between two images.

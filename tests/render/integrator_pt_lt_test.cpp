@@ -72,7 +72,7 @@ TEST(IntegratorPtLt, PathTracingAndLightTracingAgree) {
   const WelchImage pt = render("pt", *w, settings(101, 32 * 64, 32));
   const WelchImage lt = render("lt", *w, settings(202, 32 * 64, 32));
   const ImageCompareResult r = compare_welch_images(pt, lt, 0.001);
-  RecordProperty("comparison", r.message());  // p-values in the test log (VALIDATION.md)
+  RecordProperty("comparison", r.message());  // p-values in the test log (docs/validation.md)
   EXPECT_FALSE(r.rejects()) << r.message() << " (seeds 101 / 202)";
   EXPECT_NEAR(r.mean_relative_difference, 0.0, 0.02) << r.message();
   // Not an empty image: the light and the walls are lit.

@@ -1,6 +1,6 @@
 // |d omega_h / d omega_o| of the generalised half vector (lib/material/half_vector.h; Kaplanyan et
 // al. 2014, Eq. 10) against central finite differences over 1,000 seeded configurations per named
-// case, relative error < 1e-6 (VALIDATION.md C); a wrong Jacobian must be rejected.
+// case, relative error < 1e-6 (docs/validation.md C); a wrong Jacobian must be rejected.
 #include "lib/material/half_vector.h"
 
 #include <functional>
@@ -79,7 +79,7 @@ struct Outcome {
 
 Outcome run(const std::string& name, bool refraction, double eta_lo, double eta_hi, bool grazing,
             const std::function<double(const HvConfig&)>& jac) {
-  const double step = std::cbrt(kEpsilon * 2);  // eps^(1/3) * max(1, |x|), x = 0 (VALIDATION.md C)
+  const double step = std::cbrt(kEpsilon * 2);  // eps^(1/3) * max(1, |x|), x = 0 (docs/validation.md C)
   Outcome out;
   for (int k = 0; out.checked < 1000 && k < 100000; ++k) {
     Rng r = Rng::for_sample(1, hash_string(name), static_cast<uint64_t>(k));

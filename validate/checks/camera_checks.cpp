@@ -1,5 +1,5 @@
 // Registered checks of the cameras (lib/camera): raster <-> ray round trips, chi-square of lens
-// and direction sampling against the stated densities (VALIDATION.md A), the normalisation of
+// and direction sampling against the stated densities (docs/validation.md A), the normalisation of
 // We by quadrature (docs/camera.md), and negative controls for both.
 #include <memory>
 #include <vector>

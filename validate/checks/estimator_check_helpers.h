@@ -1,4 +1,4 @@
-// Shared machinery of the estimator checks (VALIDATION.md A and B): unbiasedness by a t-test of
+// Shared machinery of the estimator checks (docs/validation.md A and B): unbiasedness by a t-test of
 // batch means against a known integral, and replicate variances with the standard error of s² from
 // the fourth moment. Streams are Rng::for_sample(seed, key, batch): results do not depend on the
 // number of threads.

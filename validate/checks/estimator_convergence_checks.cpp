@@ -1,4 +1,4 @@
-// Convergence rates of the generic estimators (VALIDATION.md F): RMSE against the sample budget N
+// Convergence rates of the generic estimators (docs/validation.md F): RMSE against the sample budget N
 // fitted with Ceres (validate/stats/convergence_fit.h) must have exponent 0.5 for MC, MIS, SMIS and
 // MMIS on a smooth and a discontinuous integrand; the negative control, MMIS without its defensive
 // technique (biased), must not.
@@ -62,12 +62,12 @@ stats::ConvergenceStudyOptions study_options(const CheckContext& ctx, uint64_t k
   if (ctx.full) o.replicates = static_cast<int64_t>(64 * ctx.sample_scale);
   o.seed = ctx.seed;
   o.key = key;
-  // VALIDATION.md F asks for a 99% interval; Šidák over the studies of this check keeps the family at 1%.
+  // docs/validation.md F asks for a 99% interval; Šidák over the studies of this check keeps the family at 1%.
   o.fit.confidence = 1.0 - stats::sidak_alpha(0.01, studies);
   return o;
 }
 
-constexpr double kMaxHalfWidth = 0.03;  // VALIDATION.md F
+constexpr double kMaxHalfWidth = 0.03;  // docs/validation.md F
 
 CheckResult run_convergence(const CheckContext& ctx) {
   const auto ests = estimators();

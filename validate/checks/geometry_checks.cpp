@@ -23,7 +23,7 @@
 namespace tb {
 namespace {
 
-// Chi-square checks: alpha = 0.01 over all shape configurations (Sidak), VALIDATION.md A.
+// Chi-square checks: alpha = 0.01 over all shape configurations (Sidak), docs/validation.md A.
 double sidak(double alpha, size_t m) { return 1.0 - std::pow(1.0 - alpha, 1.0 / static_cast<double>(m)); }
 
 TriangleMesh check_mesh() { return make_uv_sphere_mesh(1.7, 64, 128, Vec3(3.1, -2.3, 0.7)); }
@@ -141,7 +141,7 @@ Vec2 interior_uv(uint64_t seed, uint64_t key, int64_t i) {
   return {u, 0.01 + 0.98 * r.uniform()};
 }
 
-constexpr double kDifferentialTolerance = 1e-6;  // VALIDATION.md C
+constexpr double kDifferentialTolerance = 1e-6;  // docs/validation.md C
 
 CheckResult differentials_result(const std::function<Hit(const Vec2&)>& surface, const CheckContext& ctx,
                                  const std::string& what, double uv_scale) {

@@ -1,4 +1,4 @@
-// Image-level checks of the Monte Carlo integrators (issue 5, VALIDATION.md A and F;
+// Image-level checks of the Monte Carlo integrators (docs/validation.md A and F;
 // docs/integrator-checks.md): every registered path tracer ("pt"), light tracer ("lt") and
 // bidirectional path tracer ("bdpt") against exact images of closed-form worlds
 // (validate/render/analytic_worlds.h), against each other on the shipped scenes, every BDPT
@@ -536,7 +536,7 @@ CheckResult run_convergence(const CheckContext& ctx, const std::string& integrat
       continue;
     }
     const bool contains = cv.fit.converged && cv.fit.alpha_lo <= 0.5 && 0.5 <= cv.fit.alpha_hi;
-    const bool narrow = !ctx.full || cv.fit.half_width() <= 0.03;  // VALIDATION.md F (full size)
+    const bool narrow = !ctx.full || cv.fit.half_width() <= 0.03;  // docs/validation.md F (full size)
     const bool ok = contains && narrow && !cv.floor_fit.floor_detected() && cv.nonfinite == 0;
     // The control passes when the broken estimator is rejected.
     r.passed = r.passed && (control ? !ok : ok);

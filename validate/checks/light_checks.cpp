@@ -1,5 +1,5 @@
 // Emitters: next-event sampling (sample_li) and emission sampling (sample_le) against their
-// stated solid-angle densities (chi-square, VALIDATION.md A), unbiasedness of next-event
+// stated solid-angle densities (chi-square, docs/validation.md A), unbiasedness of next-event
 // estimation of irradiance against a closed form, and a negative control.
 #include <memory>
 
@@ -239,7 +239,7 @@ CheckResult run_nee_irradiance(const CheckContext& ctx, bool broken) {
   });
   Welford w;
   for (double m : means) w.add(m);
-  const double alpha = 1e-5;  // VALIDATION.md A: analytic integrals at alpha = 1e-5
+  const double alpha = 1e-5;  // docs/validation.md A: analytic integrals at alpha = 1e-5
   const TestResult t = one_sample_t_test(w, exact);
   CheckResult r;
   const bool rejects = t.p_value < alpha;

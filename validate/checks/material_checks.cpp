@@ -1,4 +1,4 @@
-// Registered checks of lib/material (VALIDATION.md A and C):
+// Registered checks of lib/material (docs/validation.md A and C):
 //  * chi-square of every non-delta BSDF's sample() against its own pdf() over roughness,
 //    index of refraction and incident angle (Sidak over configurations), with the hard cases
 //    roughness near 0 and IOR near 1 as separately named checks, and a negative control;
@@ -80,7 +80,7 @@ std::vector<BsdfCase> chi2_cases(const std::string& bsdf, bool full) {
   return v;
 }
 
-// Named hard cases (VALIDATION.md C: never averaged away).
+// Named hard cases (docs/validation.md C: never averaged away).
 std::vector<BsdfCase> low_roughness_cases(bool full) {
   std::vector<BsdfCase> v;
   for (const Dist& d : kDists)
@@ -102,7 +102,7 @@ SamplerChi2Result bsdf_chi2(const Bsdf& b, const Vec3& wo, const CheckContext& c
   o.seed = ctx.seed;
   o.key = key;
   const bool reflect_only = !(b.flags() & bsdf_flags::kTransmission) && wo.z > 0;
-  // Odd resolutions (VALIDATION.md A); the quick grid is coarser so that quadrature stays cheap.
+  // Odd resolutions (docs/validation.md A); the quick grid is coarser so that quadrature stays cheap.
   const int n_phi = ctx.full ? 101 : 41, n_cos = ctx.full ? 51 : 21;
   const Chi2Domain dom = reflect_only ? Chi2Domain::hemisphere(n_phi, n_cos) : Chi2Domain::sphere(n_phi, 2 * n_cos + 1);
   const auto sample = [&](Uniforms& u) -> std::optional<Vec3> {
@@ -177,7 +177,7 @@ TB_REGISTER_CHECK({.name = "material.bsdf.hard.low_roughness.chi2",
                                            low_roughness_cases(ctx.full), 0.01);
                    }});
 
-// ---- IOR near 1 on a zoomed domain (VALIDATION.md C hard case "IOR 1.0001") -----------------
+// ---- IOR near 1 on a zoomed domain (docs/validation.md C hard case "IOR 1.0001") -----------------
 // At eta = 1.0001 the transmitted lobe is ~(eta - 1) tan(theta_h) ~ 1e-6..1e-3 rad wide around
 // the refracted direction: on the whole sphere the cell quadrature misses it (the pdf integrated
 // to 0.03 on a 41 x 43 grid). Here directions are binned on an orthographic chart of a small cap
@@ -564,7 +564,7 @@ const HvCase kHvCases[] = {{"reflection", false, 1, 1, false},
 CheckResult run_half_vector_fd(const CheckContext& ctx, const std::function<double(const HvConfig&)>& closed_form,
                                bool negative_control) {
   const int64_t per_case = ctx.size(1000, 4000);
-  const double step = std::cbrt(2 * kEpsilon);  // eps^(1/3) max(1, |x|) at x = 0 (VALIDATION.md C)
+  const double step = std::cbrt(2 * kEpsilon);  // eps^(1/3) max(1, |x|) at x = 0 (docs/validation.md C)
   stats::FdOptions fo;
   fo.seed = ctx.seed;
   CheckResult res;

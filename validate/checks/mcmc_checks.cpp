@@ -1,10 +1,10 @@
 // Detailed balance and stationarity of the MCMC kernels of estimators/mcmc/ on the analytic targets
-// of analytic/mcmc/ (VALIDATION.md E), and the negative controls these checkers must reject: the
+// of analytic/mcmc/ (docs/validation.md E), and the negative controls these checkers must reject: the
 // acceptance without T(y->x)/T(x->y), a reversible-jump move without its Jacobian, and a proposal
 // whose stated sigma is 5% off. Names: mcmc.<target>.<kernel>.<checker>; negative controls:
 // mcmc.negative_control.<defect>.<checker>, passing when the broken kernel IS rejected.
 //
-// Significance: every statistical check runs at alpha = 1e-5 (VALIDATION.md budget: about 100
+// Significance: every statistical check runs at alpha = 1e-5 (docs/validation.md budget: about 100
 // assertions, 1e-3 per CI run); multi-part checks split it by Šidák inside their checker.
 #include <functional>
 #include <string>

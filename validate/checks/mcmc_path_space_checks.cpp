@@ -1,5 +1,5 @@
 // Checks of Veach's path-space MLT mutations (lib/mcmc/path_space/, docs/mlt-path-space.md) on
-// the Cornell box at 16 x 16 pixels (VALIDATION.md E and A, issue 6 "Checks on light paths"):
+// the Cornell box at 16 x 16 pixels (docs/validation.md E and A):
 //  - mlt.path_space.<mutation>.pairwise: pi(x) T(x->y) a(x->y) = pi(y) T(y->x) a(y->x) to 1e-9
 //    relative on seeded path pairs (x from BDPT, y proposed by the mutation), with the acceptance
 //    built by the estimators' Metropolis-Hastings kernel from the mutation's stated T and the

@@ -157,8 +157,7 @@ CheckResult run_rescaled_pairwise(const CheckContext& ctx, bool pt, bool no_rati
 }
 
 // ---- flux symmetry by bins ------------------------------------------------------------------------
-// VALIDATION.md E "flux symmetry", issue 6 "flux symmetry of each MLT variant binned by pixel and
-// path length", with validate/mcmc/flux_symmetry.h (binomial test per bin pair, Šidák, and the
+// docs/validation.md E "flux symmetry": each MLT variant binned by pixel and path length, with validate/mcmc/flux_symmetry.h (binomial test per bin pair, Šidák, and the
 // global chi-square, alpha = 1e-5). A PSS state has one camera raster (the first two camera-stream
 // uniforms, pss_sample.h) but, over BDPT, paths of every length at once; its bin is therefore
 // (4 x 4-pixel block of the camera raster) x (brightness class: pi(u) below b / 4, below 4 b, above,
@@ -286,7 +285,7 @@ CheckResult run_pss_flux(const CheckContext& ctx, FluxVariant v, const std::stri
 // A coordinate of a PssState left unread for n accepted small steps (rejected iterations in
 // between, which must not count) has moved by the wrapped N(0, n sigma^2) of pss_state.h. Samples
 // y = x_fixed + (x_n - x_0) mod 1, x_fixed = 0.02 so that the wrap is exercised; chi-square over
-// 101 cells of [0, 1) against g_{sigma sqrt(n)}(y - x_fixed), alpha 1e-5 (VALIDATION.md A).
+// 101 cells of [0, 1) against g_{sigma sqrt(n)}(y - x_fixed), alpha 1e-5 (docs/validation.md A).
 // Negative control: the density stated for n - 1 steps (sigma 3% narrower) must be rejected.
 constexpr double kChi2Alpha = 1e-5;
 
@@ -339,15 +338,15 @@ CheckResult run_lazy_chi2(const CheckContext& ctx, bool misstated, const std::st
 }
 
 // ---- the rescaled small step and the large step against their stated densities ------------------
-// Proposal chi-square (issue 6, "for every mutation: proposal samples against the stated density in
-// a low-dimensional projection"). Projection: the displacement d = y_0 - x_0 (wrapped to (-1/2,
+// Proposal chi-square (every mutation: proposal samples against the stated density in a
+// low-dimensional projection). Projection: the displacement d = y_0 - x_0 (wrapped to (-1/2,
 // 1/2]) of coordinate 0, the camera raster's first uniform, which every state reads, so that the
 // rescaled step moves it with sigma(x) (pss_steps.h: D(x) ∩ D(y)). Stated marginal: the
 // coordinate-0 factor of the rescaled small step's T, the wrapped normal g_{sigma(x)} with
 // sigma(x) = scale(pi(x)); the large step: uniform. Three states x of the 16x16 Cornell box
 // (PT target) with sigma(x) in [0.02, 0.1] (dim paths; on bright ones sigma reaches 1e-4, below the
 // 1/401 cell width); chi-square over 401 cells of d + 1/2, alpha 1e-5 Šidák over the three.
-// Negative control: the rescaled step's density stated with sigma 5 % too wide (VALIDATION.md E,
+// Negative control: the rescaled step's density stated with sigma 5 % too wide (docs/validation.md E,
 // "a proposal whose stated density is 5 % off its true one").
 CheckResult run_step_chi2(const CheckContext& ctx, bool large, bool misstated, const std::string& name) {
   constexpr int kRes = 16;

@@ -1,4 +1,4 @@
-// Checks of the generic estimators on the analytic catalogue (VALIDATION.md A, B, F):
+// Checks of the generic estimators on the analytic catalogue (docs/validation.md A, B, F):
 //   mmis.unbiased                       every estimator on every problem where its support condition holds
 //   mmis.unbiased.negative_control      MMIS without its defensive technique (a coverage gap) must be rejected
 //   mmis.variance_vs_n                  MMIS_n variance non-increasing in n, approaching the exact reference MIS
@@ -112,7 +112,7 @@ std::vector<NamedEstimator1D> estimators_1d() {
   return v;
 }
 
-constexpr double kFamilyAlpha = 1e-5;  // VALIDATION.md A, before the Šidák correction below
+constexpr double kFamilyAlpha = 1e-5;  // docs/validation.md A, before the Šidák correction below
 constexpr int kBatches = 256;
 
 CheckResult run_unbiased(const CheckContext& ctx) {
@@ -151,7 +151,7 @@ TB_REGISTER_CHECK({.name = "mmis.unbiased",
                    .kind = CheckKind::kStatistical,
                    .run = run_unbiased});
 
-// Negative control (VALIDATION.md B): MMIS over the three partial techniques of Fig. 1 bottom, without
+// Negative control (docs/validation.md B): MMIS over the three partial techniques of Fig. 1 bottom, without
 // the defensive one: the gaps (0.3, 0.38) and (0.62, 0.7) are sampled by no conditional technique,
 // so the estimate misses ∫_gaps f. The check passes when the t-test rejects.
 CheckResult run_unbiased_negative(const CheckContext& ctx) {

@@ -1,4 +1,4 @@
-// MMIS variance against the number n of technique-sample pairs (VALIDATION.md B; West et al. 2022,
+// MMIS variance against the number n of technique-sample pairs (docs/validation.md B; West et al. 2022,
 // Sec. 3.2 and Fig. 1 bottom): at a fixed budget N = 64, MMIS_n (n pairs from each of T = 4
 // techniques, N / (nT) realisations averaged) must have a variance non-increasing in n (within its
 // standard error) that approaches the variance of the reference MIS with exact marginals, computed

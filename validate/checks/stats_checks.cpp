@@ -216,7 +216,7 @@ stats::ConvergenceStudyOptions study_options(const CheckContext& ctx, const char
 }
 
 CheckResult run_mc_rate(const CheckContext& ctx) {
-  constexpr double kMaxHalfWidth = 0.03;  // VALIDATION.md F
+  constexpr double kMaxHalfWidth = 0.03;  // docs/validation.md F
   const auto o = study_options(ctx, "stats.convergence.mc_rate");
   const stats::ConvergenceStudy s = stats::run_convergence_study(exp_integrand_mc(0.0), kExpIntegral, o);
   // Negative control: an estimator that uses only sqrt(N) of its N samples converges at rate 1/4.

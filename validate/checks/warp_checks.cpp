@@ -1,4 +1,4 @@
-// Registered checks of the sampling warps of lib/core (VALIDATION.md A): a chi-square fit of
+// Registered checks of the sampling warps of lib/core (docs/validation.md A): a chi-square fit of
 // each warp's samples against its own pdf (alpha = 0.01, Sidak over the configurations of a
 // warp), deterministic inverse round trips, and a negative control the chi-square test must
 // reject.

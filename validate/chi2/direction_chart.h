@@ -1,4 +1,4 @@
-// A zoomed spherical domain for the sampler chi-square test (VALIDATION.md A; docs/chi2.md):
+// A zoomed spherical domain for the sampler chi-square test (docs/validation.md A; docs/chi2.md):
 // directions near an axis a, expressed in the frame (s, t, a) and binned on the orthographic
 // chart of the cap around a,
 //
@@ -16,7 +16,7 @@
 //
 // Samples outside the chart square (or in the far hemisphere) go to the failure cell, as do
 // the sampler's failures; its expected count is N (1 - int_chart pdf_chart), i.e. the mass the
-// stated pdf puts outside the chart plus any deficit of the pdf (VALIDATION.md A). Because that
+// stated pdf puts outside the chart plus any deficit of the pdf (docs/validation.md A). Because that
 // mass can be small but nonzero, the front end lowers failure_mass_floor (see zoomed options).
 #pragma once
 

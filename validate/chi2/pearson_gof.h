@@ -1,5 +1,5 @@
 // Pearson's chi-square goodness of fit of observed counts against expected counts
-// (VALIDATION.md A). Cells with expected count below a threshold (5) are pooled into one
+// (docs/validation.md A). Cells with expected count below a threshold (5) are pooled into one
 // cell, as Mitsuba 3's chi2 test does; any observation in a cell of zero expected mass fails
 // hard (p = 0) and names the cell. dof = cells after pooling - 1; the p-value is the upper
 // tail of Boost.Math's chi_squared distribution.

@@ -1,4 +1,4 @@
-// The chi-square test of a sampling routine against its own density (VALIDATION.md A;
+// The chi-square test of a sampling routine against its own density (docs/validation.md A;
 // after Mitsuba 3's chi2.py and pbrt-v4's sampling tests). Samples are drawn from seeded
 // streams (Rng::for_sample(seed, key, i)) in parallel and histogrammed on a grid over the
 // domain; expected counts integrate the stated pdf over every cell with adaptive
@@ -38,7 +38,7 @@ namespace tb {
 enum class Chi2DomainKind { kInterval, kRectangle, kSphere, kHemisphere };
 
 // A grid over a parameter rectangle (x, y): for spheres x = phi in [0, 2 pi), y = cos theta.
-// Odd resolutions keep cell edges off symmetric discontinuities (VALIDATION.md A).
+// Odd resolutions keep cell edges off symmetric discontinuities (docs/validation.md A).
 struct Chi2Domain {
   Chi2DomainKind kind = Chi2DomainKind::kRectangle;
   double x_min = 0, x_max = 1, y_min = 0, y_max = 1;

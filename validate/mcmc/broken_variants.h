@@ -1,5 +1,5 @@
 // Deliberately broken kernels and moves: the negative controls every MCMC checker must reject
-// (VALIDATION.md, "every check has a negative control"). Each is the correct code with one factor
+// (docs/validation.md, "every check has a negative control"). Each is the correct code with one factor
 // removed or misstated, built from the same estimators/mcmc/ templates.
 #pragma once
 

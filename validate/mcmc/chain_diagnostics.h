@@ -1,4 +1,4 @@
-// Diagnostics reported for every chain run (VALIDATION.md E, "Diagnostics, not proofs"): m chains
+// Diagnostics reported for every chain run (docs/validation.md E, "Diagnostics, not proofs"): m chains
 // started from exact draws, the target's scalar summary recorded at every step, split R-hat
 // (rank-normalised, Vehtari et al. 2021) and the multi-chain effective sample size, from
 // validate/stats/mcmc_diagnostics.h; plus the mean acceptance probability.

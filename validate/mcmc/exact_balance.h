@@ -1,4 +1,4 @@
-// Exact detailed-balance check on a finite state space (VALIDATION.md E, first item): builds the
+// Exact detailed-balance check on a finite state space (docs/validation.md E, first item): builds the
 // transition matrix P_ij = sum_k c_k(i) T_k(i -> j) a_k(i -> j) for i != j, P_ii = 1 - sum_{j != i}
 // P_ij, from the kernel's exposed proposal density and acceptance (no sampling), normalises pi, and
 // reports max_ij |pi_i P_ij - pi_j P_ji| and ||pi P - pi||_1. Both must be below 1e-12: P has

@@ -1,4 +1,4 @@
-// Flux symmetry (VALIDATION.md E, third item). Chains start from exact draws of pi and run `steps`
+// Flux symmetry (docs/validation.md E, third item). Chains start from exact draws of pi and run `steps`
 // transitions; every transition between different bins i -> j is counted. For a kernel reversible
 // with respect to pi, the chain is stationary from its first step and E[N_ij] = E[N_ji]. Two tests,
 // each at alpha/2 (Šidák over the two, family-wise alpha):

@@ -1,4 +1,4 @@
-// Pairwise detailed balance on seeded proposal pairs (VALIDATION.md E, second item). For each
+// Pairwise detailed balance on seeded proposal pairs (docs/validation.md E, second item). For each
 // pair, x is an exact draw from pi (or any start sampler), the kernel proposes a move m to y, and
 //   F = pi(x) q(x -> m) a(x -> m),   B = pi(y) q(y -> m') a(y -> m'),   m' = reverse(x, m)
 // must agree to a relative 1e-9 (|F - B| <= 1e-9 max(F, B)). For Metropolis-Hastings q is

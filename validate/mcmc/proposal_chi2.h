@@ -1,5 +1,5 @@
 // Chi-square of a 1D proposal T(x -> .) at a fixed x against its own STATED density
-// (VALIDATION.md A, "mutation proposals"), through the generic sampler test of
+// (docs/validation.md A, "mutation proposals"), through the generic sampler test of
 // validate/chi2/sampler_chi2.h (101 cells, expected counts by adaptive quadrature of the stated
 // density). This is the check that sees a density stated inconsistently with the sampler (a wrong
 // sigma), which the pairwise balance check cannot see by construction.

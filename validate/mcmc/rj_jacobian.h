@@ -1,5 +1,5 @@
 // Checks a reversible-jump dimension-matching map g(x, u) = y against finite differences
-// (VALIDATION.md C applied to E): over seeded configurations (x, u), with x and u drawn from
+// (docs/validation.md C applied to E): over seeded configurations (x, u), with x and u drawn from
 // caller-supplied samplers, the stated |det dg/d(x, u)| must match the determinant of the
 // central-difference Jacobian (step h = eps^(1/3) max(1, |z_i|), Press et al., Numerical Recipes
 // 3rd ed., Sec. 5.7) to a relative 1e-6, and g^{-1}(g(x, u)) must return (x, u) to 1e-10.

@@ -1,4 +1,4 @@
-// Stationarity tests (VALIDATION.md E, fourth item).
+// Stationarity tests (docs/validation.md E, fourth item).
 //
 // chi-square: `chains` chains start from exact draws of pi and apply k transitions each; the
 // histogram of the final states over the target's bins is compared with the exact bin masses by

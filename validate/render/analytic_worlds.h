@@ -1,4 +1,4 @@
-// Closed-form test worlds for the image-level checks of the integrators (VALIDATION.md A:
+// Closed-form test worlds for the image-level checks of the integrators (docs/validation.md A:
 // "analytic scenes with known radiance come first"), each with its exact image: the value
 // every pixel of an unbiased render converges to. docs/integrator-checks.md derives the
 // closed forms; in short (per colour channel, Lambert albedo rho, pinhole camera, box filter):

@@ -1,4 +1,4 @@
-// Convergence rate and efficiency of a registered integrator on one world (VALIDATION.md F;
+// Convergence rate and efficiency of a registered integrator on one world (docs/validation.md F;
 // validate/stats/convergence_fit.h; docs/integrator-checks.md): R independent renders at each
 // sample count N = 2^k spp (fresh seeds, no sample prefix reused), the image MSE against a
 // reference (an exact image, or a long render whose own estimator variance is subtracted so it

@@ -1,6 +1,6 @@
 // Batch means: a stream of (possibly correlated) observations cut into consecutive batches of
 // equal size; the batch means are nearly independent and nearly normal when batches are long,
-// so a one-sample t test on them tests the stream's mean (VALIDATION.md A: 2^22 samples in 256
+// so a one-sample t test on them tests the stream's mean (docs/validation.md A: 2^22 samples in 256
 // batches, t test against the closed-form value). Also the batch-means estimate of the
 // asymptotic variance of an MCMC average (Flegal & Jones 2010).
 #pragma once

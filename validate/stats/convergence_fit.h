@@ -1,4 +1,4 @@
-// Convergence-rate fits with Ceres (VALIDATION.md F).
+// Convergence-rate fits with Ceres (docs/validation.md F).
 //
 // Model: RMSE(N) = C N^(-alpha). For R independent replicates at each N, with approximately normal
 // errors, MSE_hat ~ MSE chi2_R / R, so Var(ln RMSE_hat) ~= 1 / (2R) (delta method); the whitened

@@ -1,4 +1,4 @@
-// Finite-difference checker of an analytic Jacobian of f: R^n -> R^m (VALIDATION.md C), for
+// Finite-difference checker of an analytic Jacobian of f: R^n -> R^m (docs/validation.md C), for
 // path-space Jacobians, half-vector maps, reversible-jump maps and every hand-derived derivative.
 //
 // At each configuration x it computes:

@@ -1,4 +1,4 @@
-// Diagnostics of Markov-chain output (VALIDATION.md E, "Diagnostics, not proofs"): the
+// Diagnostics of Markov-chain output (docs/validation.md E, "Diagnostics, not proofs"): the
 // autocorrelation function, the integrated autocorrelation time by Geyer's initial sequence
 // estimators, the effective sample size, and split R-hat over several chains.
 //

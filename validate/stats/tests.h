@@ -40,7 +40,7 @@ double students_t_two_sided_p(double t, double dof);
 // statistic = (mean - mu0) / std_error.
 TestResult z_test(double mean, double std_error, double mu0);
 // One-sided z test of H0: value <= bound against value > bound; p = 1 - Phi((value - bound) / se).
-// Used for "Var <= B" (VALIDATION.md D).
+// Used for "Var <= B" (docs/validation.md D).
 TestResult z_test_greater(double value, double std_error, double bound);
 // Two-sided one-sample t test of H0: mu = mu0, t = (mean - mu0) / (s / sqrt(n)), dof = n - 1.
 TestResult one_sample_t_test(double mean, double s, int64_t n, double mu0);
@@ -83,7 +83,7 @@ double sidak_alpha(double alpha, int64_t m);
 // Family-wise p-value of the smallest of m p-values: 1 - (1 - p_min)^m = -expm1(m * log1p(-p_min)).
 double sidak_adjust(double p_min, int64_t m);
 // Stouffer's combined z: Z = sum z_i / sqrt(P), two-sided normal p-value (uniform-sign bias;
-// VALIDATION.md A, global tests of Jung et al. 2020).
+// docs/validation.md A, global tests of Jung et al. 2020).
 TestResult stouffer(std::span<const double> z);
 // Sum of squares Q = sum z_i^2 against chi-square with P dof, upper-tail p-value (mixed-sign bias).
 TestResult sum_z2_test(std::span<const double> z);
@@ -98,7 +98,7 @@ double z_test_power(double delta, double alpha);
 // from the non-central t distribution (Boost.Math non_central_t).
 double t_test_power(double delta, double dof, double alpha);
 // Smallest shift (in standard errors) the two-sided z test detects with the given power:
-// solves z_test_power(delta, alpha) = power (VALIDATION.md A: "smallest bias detected at 90%").
+// solves z_test_power(delta, alpha) = power (docs/validation.md A: "smallest bias detected at 90%").
 double minimal_detectable_shift(double alpha, double power = 0.9);
 // The same in units of the estimate: minimal_detectable_shift(alpha, power) * std_error.
 double minimal_detectable_bias(double std_error, double alpha, double power = 0.9);

@@ -45,7 +45,7 @@ class Welford {
   // Standard error of the unbiased sample variance s^2 from the fourth moment:
   //   SE(s^2)^2 ~= (m4 - (n - 3) / (n - 1) * s^4) / n
   // i.e. the exact iid variance Var(s^2) = mu4/n - (n-3)/(n(n-1)) sigma^4 with the plug-in m4 for
-  // mu4 and s^2 for sigma^2. Returns +inf when n < 4. Used by the variance-bound checks (VALIDATION.md D).
+  // mu4 and s^2 for sigma^2. Returns +inf when n < 4. Used by the variance-bound checks (docs/validation.md D).
   double variance_std_error() const;
 
   // Raw accumulators, for serialising and for tests.

@@ -5,7 +5,7 @@
 //   mmlt    Hachisuka, Kaplanyan & Dachsbacher 2014 (one chain set per path length, one
 //           technique per sample, chosen by a uniform of the state).
 //
-// One film pass = one independent group of chains (a Welch sample, VALIDATION.md A):
+// One film pass = one independent group of chains (a Welch sample, docs/validation.md A):
 //   1. bootstrap: M independent samples u_j per level (fresh uniforms), I_j = I(level, u_j);
 //      b_l = mean of I over level l (Kelemen 2002, Sec. 5.2: b = E[I(u)]), b = sum_l b_l;
 //   2. chains start at bootstrap samples drawn with probability I_j / sum I (sampling-importance

@@ -1,5 +1,5 @@
-// Flux symmetry by bins (VALIDATION.md E, "flux symmetry"; issue 6, "flux symmetry of each MLT
-// variant binned by pixel and path length"). For a kernel reversible with respect to pi, at
+// Flux symmetry by bins (docs/validation.md E, "flux symmetry"), each MLT variant binned by pixel
+// and path length. For a kernel reversible with respect to pi, at
 // stationarity the expected number of transitions from bin A to bin B equals that from B to A
 // (pi(A) P(A -> B) = pi(B) P(B -> A)), so given N_AB + N_BA crossings between A and B, N_AB is
 // Binomial(N_AB + N_BA, 1/2). Bins: (pixel block of block x block pixels) x (path length).

@@ -1,4 +1,4 @@
-// Net flux of a path-space kernel (VALIDATION.md E, "flux symmetry", in a form that needs no exact
+// Net flux of a path-space kernel (docs/validation.md E, "flux symmetry", in a form that needs no exact
 // draws from pi). For a kernel reversible with respect to pi and any antisymmetric function
 // g(x, y) = -g(y, x), the pair (X, X') of a stationary transition is exchangeable, so
 // E_pi[g(X, X')] = 0: the net flux across any partition (bins of pixel, path length, ...) is

@@ -1,5 +1,5 @@
 // Low-dimensional projections of the path-space proposals with their STATED densities, for the
-// chi-square checks of proposal samples (VALIDATION.md A, "mutation proposals"; validate/chi2):
+// chi-square checks of proposal samples (docs/validation.md A, "mutation proposals"; validate/chi2):
 //  - BidirWayProjection: one way of the bidirectional mutation at a fixed x with k >= 3 segments
 //    (delete x_{k-2}, add one vertex; split s' = 1: sampled from the light side at x_{k-3}, s' = 0:
 //    from the camera side at x_{k-1}). Projection: the unit direction from the sampling vertex to
