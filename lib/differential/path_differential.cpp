@@ -445,8 +445,9 @@ EndpointCovariance endpoint_covariance_incremental(const std::vector<StepBlocks>
   //   [Phi_{j+1}^2] = g_prev [Phi_{j-1}^2] g_prev^T + g_prev [.]^T g_cur^T + g_cur [.] g_prev^T
   //                   + g_cur [Phi_j^2] g_cur^T + g_u g_u^T.
   // The last term, A_j^-1 A_j^-T, is u_j's own spread; the printed equation leaves it out.
-  Mat2 s_cur = Mat2::Zero(), s_prev = Mat2::Zero(), x = Mat2::Zero();  // [Phi_j^2], [Phi_{j-1}^2], [Phi_j Phi_{j-1}^T]
-  Mat2 c_cur = Mat2::Zero(), c_prev = Mat2::Zero();                     // camera columns dxi/du_0
+  IncrementalSums z;
+  Mat2 &s_cur = z.s_cur, &s_prev = z.s_prev, &x = z.x;  // [Phi_j^2], [Phi_{j-1}^2], [Phi_j Phi_{j-1}^T]
+  Mat2 &c_cur = z.c_cur, &c_prev = z.c_prev;             // camera columns dxi/du_0
   for (size_t j = 0; j < blocks.size(); ++j) {
     const StepBlocks& b = blocks[j];
     const Mat2 xn = b.g_prev * x.transpose() + b.g_cur * s_cur;
@@ -460,15 +461,19 @@ EndpointCovariance endpoint_covariance_incremental(const std::vector<StepBlocks>
     c_prev = c_cur;
     c_cur = cn;
   }
+  return endpoint_covariance_from_sums(z, e);
+}
+
+EndpointCovariance endpoint_covariance_from_sums(const IncrementalSums& z, const EndpointMap& e) {
   EndpointCovariance c;
   // The block triple of App. B.2: [Phi_k^2] -> positions, [Theta_k^2] -> directions, and the mixed block.
-  c.sigma.topLeftCorner<2, 2>() = e.p_x * s_cur * e.p_x.transpose();
-  c.sigma.bottomRightCorner<2, 2>() = e.d_prev * s_prev * e.d_prev.transpose() +
-                                      e.d_prev * x.transpose() * e.d_cur.transpose() +
-                                      e.d_cur * x * e.d_prev.transpose() + e.d_cur * s_cur * e.d_cur.transpose();
-  c.sigma.topRightCorner<2, 2>() = e.p_x * (x * e.d_prev.transpose() + s_cur * e.d_cur.transpose());
+  c.sigma.topLeftCorner<2, 2>() = e.p_x * z.s_cur * e.p_x.transpose();
+  c.sigma.bottomRightCorner<2, 2>() = e.d_prev * z.s_prev * e.d_prev.transpose() +
+                                      e.d_prev * z.x.transpose() * e.d_cur.transpose() +
+                                      e.d_cur * z.x * e.d_prev.transpose() + e.d_cur * z.s_cur * e.d_cur.transpose();
+  c.sigma.topRightCorner<2, 2>() = e.p_x * (z.x * e.d_prev.transpose() + z.s_cur * e.d_cur.transpose());
   c.sigma.bottomLeftCorner<2, 2>() = c.sigma.topRightCorner<2, 2>().transpose();
-  const Mat42 J = endpoint_columns(e, c_cur, c_prev);
+  const Mat42 J = endpoint_columns(e, z.c_cur, z.c_prev);
   c.sigma_camera = J * J.transpose();
   return c;
 }

@@ -215,4 +215,13 @@ EndpointCovariance endpoint_covariance_full(const std::vector<StepBlocks>& block
 // ([Phi_j^2], [Phi_{j-1}^2], [Phi_j Phi_{j-1}^T]) and the camera columns propagated together.
 EndpointCovariance endpoint_covariance_incremental(const std::vector<StepBlocks>& blocks, const EndpointMap& e);
 
+// The state of the incremental form after the last bounce: [Phi_k^2], [Phi_{k-1}^2],
+// [Phi_k Phi_{k-1}^T] and the camera columns dxi_k/du_0, dxi_{k-1}/du_0; and the endpoint
+// covariances it gives (App. B.2, the block triple mapped by Eq. 45).
+struct IncrementalSums {
+  Mat2 s_cur = Mat2::Zero(), s_prev = Mat2::Zero(), x = Mat2::Zero();
+  Mat2 c_cur = Mat2::Zero(), c_prev = Mat2::Zero();
+};
+EndpointCovariance endpoint_covariance_from_sums(const IncrementalSums& sums, const EndpointMap& e);
+
 }  // namespace tb::differential

@@ -391,7 +391,8 @@ using CovarianceFn = std::function<EndpointCovariance(const std::vector<StepBloc
 // Copy of endpoint_covariance_incremental with the update as printed in App. B.2, i.e. without
 // the A_j^-1 A_j^-T of the bounce's own u_j (kept for the camera step, which starts the sums).
 EndpointCovariance incremental_as_printed(const std::vector<StepBlocks>& blocks, const EndpointMap& e) {
-  Mat2 s_cur = Mat2::Zero(), s_prev = Mat2::Zero(), x = Mat2::Zero(), c_cur = Mat2::Zero(), c_prev = Mat2::Zero();
+  IncrementalSums z;
+  Mat2 &s_cur = z.s_cur, &s_prev = z.s_prev, &x = z.x, &c_cur = z.c_cur, &c_prev = z.c_prev;
   for (size_t j = 0; j < blocks.size(); ++j) {
     const StepBlocks& b = blocks[j];
     const Mat2 xn = b.g_prev * x.transpose() + b.g_cur * s_cur;
@@ -405,18 +406,7 @@ EndpointCovariance incremental_as_printed(const std::vector<StepBlocks>& blocks,
     c_prev = c_cur;
     c_cur = cn;
   }
-  EndpointCovariance c;
-  c.sigma.topLeftCorner<2, 2>() = e.p_x * s_cur * e.p_x.transpose();
-  c.sigma.bottomRightCorner<2, 2>() = e.d_prev * s_prev * e.d_prev.transpose() +
-                                      e.d_prev * x.transpose() * e.d_cur.transpose() +
-                                      e.d_cur * x * e.d_prev.transpose() + e.d_cur * s_cur * e.d_cur.transpose();
-  c.sigma.topRightCorner<2, 2>() = e.p_x * (x * e.d_prev.transpose() + s_cur * e.d_cur.transpose());
-  c.sigma.bottomLeftCorner<2, 2>() = c.sigma.topRightCorner<2, 2>().transpose();
-  Mat42 J;
-  J.topRows<2>() = e.p_x * c_cur;
-  J.bottomRows<2>() = e.d_prev * c_prev + e.d_cur * c_cur;
-  c.sigma_camera = J * J.transpose();
-  return c;
+  return endpoint_covariance_from_sums(z, e);
 }
 
 // The two forms sum the same terms in different orders; rounding is relative to the terms before

@@ -63,6 +63,7 @@
 #include "validate/render/render_compare.h"
 #include "validate/stats/tests.h"
 #include "validate/stats/welford.h"
+#include "validate/mcmc/path_space/scene_cache.h"
 
 namespace tb {
 namespace {
@@ -72,24 +73,10 @@ constexpr double kAlpha = 1e-5;
 constexpr int kMaxDepth = 4;  // paths of up to 5 segments
 constexpr int kResolution = 16;
 
-struct CornellScene {
-  std::unique_ptr<World> world;
-  std::unique_ptr<LightSampler> lights;
-  PathContext ctx;
-};
+using CornellScene = LoadedScene;
 
-// Scenes at kResolution, loaded once each (the checks run sequentially).
-const CornellScene& scene(const std::string& file) {
-  static std::map<std::string, std::unique_ptr<CornellScene>> cache;
-  auto& s = cache[file];
-  if (!s) {
-    s = std::make_unique<CornellScene>();
-    s->world = load_scene_at_resolution(file, kResolution, kResolution);
-    s->lights = std::make_unique<LightSampler>(*s->world);
-    s->ctx = PathContext{s->world.get(), s->lights.get()};
-  }
-  return *s;
-}
+// Scenes at kResolution, loaded once each.
+const CornellScene& scene(const std::string& file) { return cached_scene(file, kResolution); }
 const CornellScene& cornell() { return scene("cornell-box.json"); }
 
 // The scenes with Dirac vertices (glass sphere, glass slabs, a chain of mirrors).

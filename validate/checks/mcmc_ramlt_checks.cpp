@@ -53,6 +53,7 @@
 #include "validate/render/broken_ramlt.h"
 #include "validate/render/pixel_groups.h"
 #include "validate/render/render_compare.h"
+#include "validate/mcmc/path_space/scene_cache.h"
 
 namespace tb {
 namespace {
@@ -62,22 +63,8 @@ constexpr double kAlpha = 1e-5;
 constexpr int kMaxDepth = 4;
 constexpr int kRes = 16;
 
-struct SceneCtx {
-  std::unique_ptr<World> world;
-  std::unique_ptr<LightSampler> lights;
-  PathContext ctx;
-};
-const SceneCtx& scene(const std::string& file) {
-  static std::map<std::string, std::unique_ptr<SceneCtx>> cache;
-  auto& s = cache[file];
-  if (!s) {
-    s = std::make_unique<SceneCtx>();
-    s->world = load_scene_at_resolution(file, kRes, kRes);
-    s->lights = std::make_unique<LightSampler>(*s->world);
-    s->ctx = PathContext{s->world.get(), s->lights.get()};
-  }
-  return *s;
-}
+using SceneCtx = LoadedScene;
+const SceneCtx& scene(const std::string& file) { return cached_scene(file, kRes); }
 
 CheckResult negate(CheckResult inner) {
   inner.passed = !inner.passed;

@@ -83,13 +83,7 @@ MltStats run_mlt(const World& world, const RenderSettings& st, Film& film, const
       if (done[ci] == 0) ++stats.chains_without_start;
       stats.mutations_total += done[ci];
       for (size_t k = 0; k < K; ++k) {
-        const mcmc::ComponentCounts& lc = local[ci][k];
-        MutationStats& m = stats.mutations[k];
-        m.proposed += lc.proposed;
-        m.failed += lc.failed;
-        m.accepted += lc.accepted;
-        m.errors += lc.errors;
-        m.acceptance_sum += lc.acceptance_sum;
+        stats.mutations[k].add(local[ci][k]);
       }
       ++stats.chains;
     }

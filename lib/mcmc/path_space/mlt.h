@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "lib/film/film.h"
+#include "estimators/mcmc/chain_step.h"
 #include "lib/integrator/render_settings.h"
 #include "lib/mcmc/path_space/path_mutations.h"
 #include "lib/scene/world.h"
@@ -51,6 +52,14 @@ struct MutationStats {
   int64_t errors = 0;           // moves with a stated forward density of 0 or non-finite terms
   double acceptance_sum = 0.0;  // sum of a over proposals
   double acceptance_rate() const { return proposed > 0 ? static_cast<double>(accepted) / proposed : 0.0; }
+  // Adds one chain's counts of this mutation.
+  void add(const mcmc::ComponentCounts& c) {
+    proposed += c.proposed;
+    failed += c.failed;
+    accepted += c.accepted;
+    errors += c.errors;
+    acceptance_sum += c.acceptance_sum;
+  }
 };
 
 struct MltStats {

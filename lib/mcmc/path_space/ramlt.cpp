@@ -208,13 +208,7 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
     if (!alive[c]) ++stats.chains_without_start;
     stats.mutations_total += alive[c] ? done : 0;
     for (size_t k = 0; k < K; ++k) {
-      const mcmc::ComponentCounts& lc = local[c][k];
-      MutationStats& m = stats.mutations[k];
-      m.proposed += lc.proposed;
-      m.failed += lc.failed;
-      m.accepted += lc.accepted;
-      m.errors += lc.errors;
-      m.acceptance_sum += lc.acceptance_sum;
+      stats.mutations[k].add(local[c][k]);
     }
     ++stats.chains;
   }
