@@ -56,7 +56,7 @@ void PssState::reject() {
 // N(0, 1) by the polar method (Marsaglia & Bray 1964): (u, v) uniform in the unit disk by
 // rejection from the square, then u f and v f with f = sqrt(-2 ln s / s), s = u^2 + v^2, are two
 // independent standard normals; the second is kept for the next call. One log and no cosine per
-// two normals (Box-Muller spent a log and a cos on each and dropped its second normal).
+// two normals.
 double PssState::gaussian() {
   if (has_spare_) {
     has_spare_ = false;
