@@ -228,6 +228,44 @@ TEST(Mmis, PerSampleWeightsGiveTheScalarEstimate) {
   EXPECT_GT(failed, 0);  // the failing draws were exercised
 }
 
+// The two uses of one per-sample weight function (for_each_mmis_weight): the analytic checks' scalar
+// estimate (evaluate_mmis) and a renderer that splats an RGB contribution weight · f_rgb / own_pdf per
+// sample. On fixed seeds both equal Eq. 6 written out directly (eq6_reference, the form evaluate_mmis had
+// before it was built on the weights) to 1e-12, and the scalar estimate is the sum of the contributions bit
+// for bit.
+TEST(Mmis, OneWeightFunctionServesTheScalarEstimateAndAnRgbSplat) {
+  const auto& f = integrand_1d("fig1_two_features");
+  const auto cn = centre_technique(0.1), wd = width_technique();
+  const std::vector<Classical1D> cls{Classical1D(UniformTechnique1D{})};
+  const std::vector<ConditionalNormal1D> mar{cn, wd};
+  const auto cs = std::span<const Classical1D>(cls);
+  const auto ms = std::span<const ConditionalNormal1D>(mar);
+  for (int n : {1, 2, 4}) {
+    const std::vector<int> nc{n}, nm{n, n};
+    for (uint64_t rep = 0; rep < 20; ++rep) {
+      Rng r = Rng::for_sample(29, n, rep);
+      RngUniforms u(r);
+      const auto d = draw_mmis(cs, std::span<const int>(nc), ms, std::span<const int>(nm), u);
+      // Analytic use: the scalar Eq. 6 estimate.
+      const Estimate e = evaluate_mmis(f, cs, std::span<const int>(nc), ms, d);
+      // Renderer use: an RGB throughput f_rgb(x) / own_pdf splatted with the sample's MMIS weight.
+      std::array<double, 3> rgb{0.0, 0.0, 0.0};
+      double scalar = 0.0;
+      for_each_mmis_weight(cs, std::span<const int>(nc), ms, d, [&](double x, const MmisWeight& w) {
+        const std::array<double, 3> f_rgb{f(x), 0.5 * f(x), 2.0 * f(x)};
+        for (size_t c = 0; c < 3; ++c) rgb[c] += w.own_pdf > 0.0 ? w.weight * f_rgb[c] / w.own_pdf : 0.0;
+        scalar += w.contribution(f(x));
+      });
+      const double reference = eq6_reference(f, cls, nc, mar, d);
+      EXPECT_EQ(scalar, e.value);
+      expect_close(e.value, reference);
+      expect_close(rgb[0], reference);
+      expect_close(rgb[1], 0.5 * reference);
+      expect_close(rgb[2], 2.0 * reference);
+    }
+  }
+}
+
 TEST(Mmis, BudgetEstimateReusesOneDrawAndEqualsRealisationsAveraged) {
   const auto& f = integrand_1d("smooth");
   const std::vector<ConditionalNormal1D> mar{centre_technique(0.1), width_technique()};
