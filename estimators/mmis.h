@@ -144,21 +144,19 @@ void for_each_mmis_weight(std::span<const C> classical, std::span<const int> cla
   const M* const mar = marginal.data();
   const size_t np = d.aux.size();
   // The Eq. 6 denominator at x: Σ_c n_c p_c(x) (the split classical sum), then Σ_(i,j) p_i(x | t_ij)
-  // in pair order. *own receives the term of classical technique own_c or of pair own_k (one of
-  // them out of range), which is one of the summands, so it is not evaluated twice.
-  const auto denominator = [&](const X& x, size_t own_c, size_t own_k, double* own) {
-    double den = 0.0;
-    for (size_t c = 0; c < classical.size(); ++c)
-      if (classical_counts[c] > 0) {
-        const double term = classical_counts[c] * static_cast<double>(classical[c].pdf(x));
-        if (c == own_c) *own = term;
-        den += term;
-      }
-    for (size_t k = 0; k < np; ++k) {
-      const double term = static_cast<double>(mar[aux[k].technique].pdf(x, aux[k].t));
-      if (k == own_k) *own = term;
-      den += term;
-    }
+  // in pair order. The sample's own term (classical technique own_c or pair own_k, the other index out of
+  // range) is one of the summands: each sum runs in two branch-free halves around it, so it is evaluated
+  // once, picked out without a per-term test, and added in the same place (the same round-off).
+  const auto classical_term = [&](const X& x, size_t c) {
+    return classical_counts[c] * static_cast<double>(classical[c].pdf(x));
+  };
+  const auto classical_range = [&](const X& x, size_t begin, size_t end, double den) {
+    for (size_t c = begin; c < end; ++c)
+      if (classical_counts[c] > 0) den += classical_counts[c] * static_cast<double>(classical[c].pdf(x));
+    return den;
+  };
+  const auto marginal_range = [&](const X& x, size_t begin, size_t end, double den) {
+    for (size_t k = begin; k < end; ++k) den += static_cast<double>(mar[aux[k].technique].pdf(x, aux[k].t));
     return den;
   };
   size_t s = 0;
@@ -170,7 +168,11 @@ void for_each_mmis_weight(std::span<const C> classical, std::span<const int> cla
       w.sample = s;
       w.technique = c;
       w.classical = true;
-      w.denominator = denominator(*x, c, np, &w.own_pdf);  // West et al. 2022, Eq. 6 denominator
+      // West et al. 2022, Eq. 6 denominator; classical_counts[c] > 0 here, so the own term is a summand.
+      double den = classical_range(*x, 0, c, 0.0);
+      w.own_pdf = classical_term(*x, c);
+      den = classical_range(*x, c + 1, classical.size(), den + w.own_pdf);
+      w.denominator = marginal_range(*x, 0, np, den);
       w.weight = safe_ratio(w.own_pdf, w.denominator);
       visit(*x, w);
     }
@@ -180,7 +182,10 @@ void for_each_mmis_weight(std::span<const C> classical, std::span<const int> cla
     MmisWeight w;
     w.sample = s;
     w.technique = aux[k].technique;
-    w.denominator = denominator(*x, classical.size(), k, &w.own_pdf);  // West et al. 2022, Eq. 6 denominator
+    // West et al. 2022, Eq. 6 denominator, the pair's own conditional term in its place.
+    double den = marginal_range(*x, 0, k, classical_range(*x, 0, classical.size(), 0.0));
+    w.own_pdf = static_cast<double>(mar[aux[k].technique].pdf(*x, aux[k].t));
+    w.denominator = marginal_range(*x, k + 1, np, den + w.own_pdf);
     w.weight = safe_ratio(w.own_pdf, w.denominator);
     visit(*x, w);
   }

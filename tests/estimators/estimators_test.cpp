@@ -202,7 +202,8 @@ TEST(Mmis, PerSampleWeightsGiveTheScalarEstimate) {
       }
       EXPECT_EQ(sum, e.value);
       expect_close(via_weight, e.value);
-      expect_close(e.value, eq6_reference(f, cls, nc, mar, d));
+      // Eq. 6 written out sums every denominator in the same order: the same round-off, bit for bit.
+      EXPECT_EQ(e.value, eq6_reference(f, cls, nc, mar, d));
       // Every sample that did not fail appears once, with its own technique's density.
       size_t drawn = 0;
       for (const auto& x : d.xs) drawn += x.has_value();
@@ -230,9 +231,8 @@ TEST(Mmis, PerSampleWeightsGiveTheScalarEstimate) {
 
 // The two uses of one per-sample weight function (for_each_mmis_weight): the analytic checks' scalar
 // estimate (evaluate_mmis) and a renderer that splats an RGB contribution weight · f_rgb / own_pdf per
-// sample. On fixed seeds both equal Eq. 6 written out directly (eq6_reference, the form evaluate_mmis had
-// before it was built on the weights) to 1e-12, and the scalar estimate is the sum of the contributions bit
-// for bit.
+// sample. On fixed seeds the scalar estimate equals Eq. 6 written out directly (eq6_reference, the form
+// evaluate_mmis had before it was built on the weights) bit for bit, and the splat to 1e-12.
 TEST(Mmis, OneWeightFunctionServesTheScalarEstimateAndAnRgbSplat) {
   const auto& f = integrand_1d("fig1_two_features");
   const auto cn = centre_technique(0.1), wd = width_technique();
@@ -258,7 +258,7 @@ TEST(Mmis, OneWeightFunctionServesTheScalarEstimateAndAnRgbSplat) {
       });
       const double reference = eq6_reference(f, cls, nc, mar, d);
       EXPECT_EQ(scalar, e.value);
-      expect_close(e.value, reference);
+      EXPECT_EQ(e.value, reference);  // the same summation order as Eq. 6 written out: bit for bit
       expect_close(rgb[0], reference);
       expect_close(rgb[1], 0.5 * reference);
       expect_close(rgb[2], 2.0 * reference);
