@@ -223,6 +223,19 @@ TEST(Mmis, PerSampleWeightsGiveTheScalarEstimate) {
         EXPECT_LE(s.w.weight, 1.0 + kTol);
         expect_close(s.w.weight * s.w.denominator, s.w.own_pdf);
       }
+      // The one-sample form gives the same weight, technique and densities, bit for bit.
+      for (const auto& sw : ws) {
+        const auto one = mmis_weight(cs, std::span<const int>(nc), ms, d, sw.w.sample);
+        ASSERT_TRUE(one);
+        EXPECT_EQ(one->technique, sw.w.technique);
+        EXPECT_EQ(one->classical, sw.w.classical);
+        EXPECT_EQ(one->own_pdf, sw.w.own_pdf);
+        EXPECT_EQ(one->denominator, sw.w.denominator);
+        EXPECT_EQ(one->weight, sw.w.weight);
+      }
+      for (size_t s = 0; s < d.xs.size(); ++s)
+        EXPECT_EQ(mmis_weight(cs, std::span<const int>(nc), ms, d, s).has_value(), d.xs[s].has_value());
+      EXPECT_FALSE(mmis_weight(cs, std::span<const int>(nc), ms, d, d.xs.size()));
       EXPECT_EQ(e.pdf_evals, static_cast<int64_t>(drawn) * mmis_pdf_evals_per_sample(std::span<const int>(nc), d));
     }
   }
