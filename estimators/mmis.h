@@ -116,6 +116,13 @@ struct MmisWeight {
   double contribution(double f) const { return safe_ratio(f, denominator); }
 };
 
+// The auxiliary t of a weighted sample's own conditional technique (e.g. the prefix a filtered path was
+// conditioned on), nullptr for a sample of a classical technique.
+template <class X, class Aux>
+const Aux* mmis_own_aux(const MmisDraw<X, Aux>& d, const MmisWeight& w) {
+  return w.classical ? nullptr : &d.aux[w.sample - d.classical_samples()].t;
+}
+
 template <class X>
 struct MmisWeightedSample {
   X x;

@@ -213,10 +213,12 @@ TEST(Mmis, PerSampleWeightsGiveTheScalarEstimate) {
         EXPECT_EQ(*d.xs[s.w.sample], s.x);
         if (s.w.classical) {
           ASSERT_LT(s.w.sample, d.classical_samples());
+          EXPECT_EQ(mmis_own_aux(d, s.w), nullptr);
           EXPECT_EQ(s.w.own_pdf, nc[s.w.technique] * cls[s.w.technique].pdf(s.x));
         } else {
           const auto& a = d.aux[s.w.sample - d.classical_samples()];
           EXPECT_EQ(a.technique, s.w.technique);
+          EXPECT_EQ(mmis_own_aux(d, s.w), &a.t);
           EXPECT_EQ(s.w.own_pdf, mar[a.technique].pdf(s.x, a.t));
         }
         EXPECT_GE(s.w.weight, 0.0);
