@@ -9,14 +9,14 @@
 // product over the kernels of a sum over that kernel's prefixes:
 //   D(x̄) = Σ_j̄ Π_k p_k(x_k | y_{k,j_k}) = Π_k S_k,   S_k = Σ_j p_k(x_k | y_{k,j})          (Eq. 14)
 // (distributivity). The left side costs K·Π_k m_k pdf evaluations (exponential in K), the right side
-// Σ_k m_k (linear in K). The MMIS weight of technique j̄ for x̄ is then Π_k p_k(x_k | y_{k,j_k}) / S_k:
-// the product of a balance-heuristic MIS weight local to each kernel.
+// Σ_k m_k (linear in K). Without classical techniques the MMIS weight of technique j̄ for x̄ is then
+// Π_k p_k(x_k | y_{k,j_k}) / S_k: the product of a balance-heuristic MIS weight local to each kernel.
 // Classical techniques mixed in by the split denominator of Sec. 3.1 (in path filtering, the suffix
-// sampled at the query vertex itself) add their Σ_c n_c p_c(x̄) to D; the product form is unchanged.
+// sampled at the query vertex itself) add their Σ_c n_c p_c(x̄) to D; the product of sums is unchanged.
 //
 // The densities are given by a callable pdf(k, j) = p_k(x_k | y_{k,j}) for the one output sample whose
-// weight is computed (k and j 0-based). mmis.h's for_each_mmis_weight over the T combinations gives the
-// same D term by term (the mmis.filtering.* checks compare the two to 1e-12).
+// weight is computed (k and j 0-based). mmis.h's for_each_mmis_weight over the T combinations as pairs
+// gives the same D and weights at exponential cost (the mmis.filtering.* checks compare them to 1e-12).
 #pragma once
 
 #include <cstdint>
