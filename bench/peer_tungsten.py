@@ -61,7 +61,7 @@ def split_fields(spec):
     return name, fields
 
 
-def peer_scene(base, integrator, fields, spp, threads_unused, out_file):
+def peer_scene(base, integrator, fields, spp, out_file):
     scene = json.loads(json.dumps(base))
     integ = dict(scene.get("integrator", {}))
     integ["type"] = integrator
@@ -88,6 +88,7 @@ def main():
     ap.add_argument("--pair", action="append", required=True, help="OURS:PEER:SPP")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--resolution", default=None, help="WxH for both renderers (default: the scenes' own)")
     ap.add_argument("--work", default=None, help="folder for the images (default: a temporary one)")
     a = ap.parse_args()
 
@@ -110,6 +111,8 @@ def main():
             img = os.path.join(work, f"ours-{our_name}-{rnd}.exr")
             cmd = [tb, "render", os.path.abspath(a.scene), "--integrator", our_name, "--spp", str(spp), "--threads",
                    str(a.threads), "--seed", str(seed), "-o", img, "--no-progress"]
+            if a.resolution:
+                cmd += ["--resolution", a.resolution]
             for k, v in our_params.items():
                 cmd += ["--param", f"{k}={v}"]
             wall, cpu, _ = run_timed(cmd)
@@ -118,7 +121,11 @@ def main():
                   f"relMSE*cpu {rows[-1][-1] * cpu:.4g}", flush=True)
             # The peer: its scene next to the original, so relative paths (meshes) resolve.
             pimg = os.path.join(work, f"peer-{peer_name}-{rnd}.pfm")
-            scene = peer_scene(base, peer_name, peer_fields, spp, a.threads, pimg)
+            scene = peer_scene(base, peer_name, peer_fields, spp, pimg)
+            if a.resolution:
+                w, h = (int(v) for v in a.resolution.split("x"))
+                for cam in [scene.get("camera", {})]:
+                    cam["resolution"] = [w, h]
             sfile = os.path.join(peer_dir, f".peer_tungsten_{os.getpid()}.json")
             with open(sfile, "w") as f:
                 json.dump(scene, f)

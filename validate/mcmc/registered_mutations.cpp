@@ -152,8 +152,10 @@ CheckResult path_registered_mutations_flux_bins(const CheckContext& ctx, const s
   using namespace path_space;
   constexpr double kAlpha = 1e-5;
   constexpr int64_t kMinCrossings = 20;
-  // The Cornell box; then the scenes with specular chains, for mutations that act on those only.
-  const std::vector<std::string> scenes = {"cornell-box.json", "caustic.json", "dg-mirror-chain.json", "dg-glass.json"};
+  // The Cornell box; then a glossy scene and the scenes with specular chains, for mutations that
+  // act on those only.
+  const std::vector<std::string> scenes = {"cornell-box.json", "glossy.json", "caustic.json", "dg-mirror-chain.json",
+                                           "dg-glass.json"};
   std::vector<std::unique_ptr<Box>> boxes(scenes.size());  // loaded when first needed
   PathMutationSettings ms;
   ms.max_segments = kMaxDepth + 1;

@@ -44,7 +44,7 @@ CheckResult path_registered_mutations_pairwise(const CheckContext& ctx, const st
 // rejected), chains from importance-resampled BDPT starts on the 16 x 16 Cornell box (max depth 3),
 // bins of 4 x 4 pixels x path length, a binomial test per bin pair with >= 20 crossings, Šidák over
 // the pairs and then over the mutations, alpha = 1e-5. A mutation with no bin pair tested on the
-// Cornell box is run on the caustic, dg-mirror-chain and dg-glass scenes in turn; one with none
+// Cornell box is run on the glossy, caustic, dg-mirror-chain and dg-glass scenes in turn; one with none
 // tested anywhere fails the check (nothing tested). The record's statistic is the family p, so a
 // negative control is caught only by a rejection (statistic < alpha), not by a pair left untested.
 CheckResult path_registered_mutations_flux_bins(const CheckContext& ctx, const std::string& name,
