@@ -24,7 +24,8 @@
 // each density estimate at the fixed radius `radius`; passes are independent Welch samples.
 // sppm: one pass = one independent progressive run of spp_per_pass iterations; an iteration
 // traces `photons` photons and one camera sample per pixel, and each pixel keeps its own radius
-// r_i, photon count N_i and unnormalised flux tau_i (Hachisuka & Jensen 2009, Eqs. 6-9):
+// r_i, photon count N_i and unnormalised flux tau_i (Hachisuka & Jensen 2009, with the radius and
+// flux update of progressive photon mapping, Hachisuka, Ogaki & Jensen 2008):
 //     M = photons found within r_i, Phi = their sum of f beta (times the camera throughput),
 //     N_{i+1} = N_i + alpha M,   r_{i+1}^2 = r_i^2 (N_i + alpha M) / (N_i + M),
 //     tau_{i+1} = (tau_i + Phi) r_{i+1}^2 / r_i^2,
