@@ -2,12 +2,14 @@
 
 #include <cmath>
 
+#include <fmt/format.h>
 
 #include "lib/differential/hslt_block_lu.h"
 #include "lib/differential/hslt_constraints.h"
 #include "lib/material/bsdf.h"
 #include "lib/material/half_vector.h"
 #include "lib/path/dirac.h"
+#include "lib/mcmc/path_space/mlt.h"
 #include "lib/scene/world.h"
 
 namespace tb::path_space {
@@ -230,4 +232,52 @@ std::optional<MltPath> HsltMutation::propose(const MltPath& x, Uniforms& u) cons
   return y;
 }
 
+PathMutationList make_hslt_mixture(const PathContext& ctx, const PathMutationSettings& s,
+                                   const std::shared_ptr<HsltCounters>& counters) {
+  const PathMutationInfo* bidir = find_path_mutation("bidirectional");
+  const PathMutationInfo* hslt = find_path_mutation("hslt");
+  PathMutationList out;
+  out.push_back(bidir->make(ctx, s, bidir->weight));
+  out.push_back(std::make_shared<const PathProposalMutation<HsltMutation>>(
+      "hslt", hslt->weight, HsltMutation(ctx, HsltMutation::kDefaultGamma, counters), hslt_applies));
+  return out;
+}
+
 }  // namespace tb::path_space
+
+namespace tb {
+
+int64_t render_hslt(const World& world, const RenderSettings& settings, Film& film) {
+  using namespace path_space;
+  const auto counters = std::make_shared<HsltCounters>();
+  MltOptions o;
+  o.mutations = [counters](const PathContext& ctx, const PathMutationSettings& s) {
+    return make_hslt_mixture(ctx, s, counters);
+  };
+  const MltStats stats = run_mlt(world, settings, film, o);
+  if (settings.report) {
+    settings.report->mutations.clear();
+    for (const auto& m : stats.mutations)
+      settings.report->mutations.push_back({m.name, m.proposed, m.accepted, m.errors});
+    settings.report->mutations_total = stats.mutations_total;
+    settings.report->mutations_per_second = stats.mutations_per_second();
+  }
+  const HsltCountsSnapshot c = snapshot(*counters);
+  double acc = 0.0, acc_generated = 0.0;
+  for (const auto& m : stats.mutations)
+    if (m.name == "hslt") {
+      acc = m.acceptance_rate();
+      acc_generated = m.proposed > m.failed ? double(m.accepted) / double(m.proposed - m.failed) : 0.0;
+    }
+  // Kaplanyan 2014, Table 3 (per half-vector proposal on a path it applies to).
+  fmt::print("hslt (Table 3): {} half-vector proposals ({} selected on paths it does not apply to); iterations "
+             "{:.2f} per converged walk / {:.2f} per walk; generation rate {:.1f}%; non-reversible {:.1f}% of the "
+             "converged walks; acceptance {:.1f}% of the generated ({:.1f}% of the selected); {:.3g} mutations/s (all "
+             "mutations)\n",
+             c.proposals, c.not_applicable, c.iterations_per_converged(), c.iterations_per_walk(),
+             100.0 * c.generation_rate(), 100.0 * c.non_reversible_fraction(), 100.0 * acc_generated, 100.0 * acc,
+             stats.mutations_per_second());
+  return stats.chains;
+}
+
+}  // namespace tb

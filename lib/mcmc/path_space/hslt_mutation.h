@@ -63,6 +63,7 @@
 
 #include "lib/core/uniforms.h"
 #include "lib/differential/hslt_walk.h"
+#include "lib/mcmc/path_space/mlt.h"
 #include "lib/mcmc/path_space/path_mutations.h"
 #include "lib/mcmc/path_space/path_state.h"
 
@@ -149,4 +150,18 @@ class HsltMutation {
 // The paths "hslt" applies to (registered applicability): HsltMutation::applicable.
 bool hslt_applies(const HsltMutation& m, const MltPath& x);
 
+// The mixture of the integrator "hslt" (as the paper's HSLT+MLT, Sec. 8): the bidirectional
+// mutation and the half-vector mutation with their registered default weights (0.4, 0.5; c_j(x)
+// normalised over the mutations that apply to x), run by run_mlt's one chain loop (mlt_chain.h).
+// `counters` receives the half-vector mutation's walk statistics.
+PathMutationList make_hslt_mixture(const PathContext& ctx, const PathMutationSettings& s,
+                                   const std::shared_ptr<HsltCounters>& counters);
+
 }  // namespace tb::path_space
+
+namespace tb {
+// The renderer entry point for the integrator registry (name "hslt"): run_mlt over
+// make_hslt_mixture; prints the statistics of Kaplanyan 2014, Table 3 (iterations per converged /
+// per forward walk, generation rate, non-reversible fraction, acceptance, mutations per second).
+int64_t render_hslt(const World& world, const RenderSettings& settings, Film& film);
+}  // namespace tb
