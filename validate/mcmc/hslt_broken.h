@@ -69,3 +69,21 @@ inline double hslt_density_without_measure(const HsltMutation& m, const MltPath&
 }
 
 }  // namespace tb::path_space
+
+namespace tb::path_space {
+
+// The mutation with T stated without the change of measure (proposals unchanged): a registered
+// mutation for the image negative control.
+class HsltWithoutMeasure {
+ public:
+  using State = MltPath;
+  explicit HsltWithoutMeasure(HsltMutation m) : m_(std::move(m)) {}
+  std::optional<MltPath> propose(const MltPath& x, Uniforms& u) const { return m_.propose(x, u); }
+  double density(const MltPath& x, const MltPath& y) const { return hslt_density_without_measure(m_, x, y); }
+  bool applicable(const MltPath& x) const { return m_.applicable(x); }
+
+ private:
+  HsltMutation m_;
+};
+
+}  // namespace tb::path_space
