@@ -271,11 +271,11 @@ int64_t render_hslt(const World& world, const RenderSettings& settings, Film& fi
     }
   // Kaplanyan 2014, Table 3 (per half-vector proposal on a path it applies to).
   fmt::print("hslt (Table 3): {} half-vector proposals ({} selected on paths it does not apply to); iterations "
-             "{:.2f} per converged walk / {:.2f} per walk; generation rate {:.1f}%; non-reversible {:.1f}% of the "
+             "{:.2f} per converged walk / {:.2f} per walk; generation rate {:.1f}%; non-reversible {} = {:.3f}% of the "
              "converged walks; acceptance {:.1f}% of the generated ({:.1f}% of the selected); {:.3g} mutations/s (all "
              "mutations)\n",
              c.proposals, c.not_applicable, c.iterations_per_converged(), c.iterations_per_walk(),
-             100.0 * c.generation_rate(), 100.0 * c.non_reversible_fraction(), 100.0 * acc_generated, 100.0 * acc,
+             100.0 * c.generation_rate(), c.non_reversible, 100.0 * c.non_reversible_fraction(), 100.0 * acc_generated, 100.0 * acc,
              stats.mutations_per_second());
   return stats.chains;
 }
