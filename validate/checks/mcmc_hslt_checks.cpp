@@ -5,6 +5,8 @@
 //    scenes/dg-curved-mirrors.json (diffuse floor + smooth mirrors: Dirac vertices held), the
 //    mutation alone in the renderer's Metropolis-Hastings kernel; counts of the forward walks by
 //    status and of the non-reversible moves in the details;
+//  - mcmc.hslt.mixture.pairwise.glossy: the same for the integrator's kernel (bidirectional +
+//    half-vector mixture with path-dependent selection), bidirectional T from its reference assembly;
 //  - mcmc.hslt.reversibility: on candidate pairs (x, y = the forward walk's result, before any reverse
 //    test; gamma = 1 to provoke non-reversible moves) of both scenes, the stated densities against an
 //    independent replay of the two walks (hslt_walk called directly): T(x->y) > 0 only if the walk
@@ -14,9 +16,15 @@
 //    the proposed y_1 projected onto the tangent plane of x_1, q = ((y_1 - x_1).s, (y_1 - x_1).t),
 //    against the stated T(x -> y) / |<ng(y_1), n(x_1)>| (the area-to-plane Jacobian), chi-square
 //    with failures in their own cell (alpha 1e-5); this is what sees the change of measure;
+//  - mcmc.hslt.proposal_chi2.dg_mirror: light -> floor -> curved mirror -> camera, only h_1
+//    perturbed, the mirror vertex y_2 in the tangent plane of x_2 against T times the area factor of
+//    the Dirac-pinned y_1 (sees the Dirac factors of the density);
+//  - mcmc.hslt.image.glossy: the integrator's mixture through run_mlt against BDPT (8 x 8, depth 3);
 //  - negative controls (validate/mcmc/hslt_broken.h), passing when the broken variant IS caught:
-//    mcmc.hslt.reversibility.no_reverse_check.negative_control (T without the landing tests) and
-//    mcmc.hslt.proposal_chi2.missing_jacobian.negative_control (T without |det J_area|).
+//    mcmc.hslt.reversibility.no_reverse_check.negative_control (T without the landing tests),
+//    mcmc.hslt.proposal_chi2.missing_jacobian.negative_control (T without |det J_area|),
+//    mcmc.hslt.proposal_chi2.dg_mirror.no_dirac_factor.negative_control (T without the Dirac
+//    factors) and mcmc.hslt.image.glossy.missing_jacobian.negative_control.
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -105,6 +113,36 @@ CheckResult hslt_pairwise(const CheckContext& cx, const std::string& name, const
                             "non-reversible",
                             file, res.message, s.proposals, s.converged, s.iterations_per_converged(),
                             s.iterations_per_walk(), s.non_reversible);
+  return res;
+}
+
+// The integrator's kernel: the mixture of make_hslt_mixture (bidirectional + half-vector, c_j(x)
+// normalised over the mutations that apply to x, so moves that change applicability carry
+// c_j(y)/c_j(x)), references from reference_density_of (the independent assembly for the
+// bidirectional mutation), on BDPT pairs of any structure.
+CheckResult hslt_mixture_pairwise(const CheckContext& cx, const std::string& name, const std::string& file) {
+  const LoadedScene& sc = scene(file);
+  const auto counters = std::make_shared<HsltCounters>();
+  PathMutationSettings ms;
+  ms.max_segments = kMaxDepth + 1;
+  const PathMixture mix(make_hslt_mixture(sc.ctx, ms, counters));
+  const auto kernel = mcmc::MetropolisHastings(PathTarget{&sc.ctx}, mix);
+  using K = decltype(kernel);
+  std::vector<std::function<double(const MltPath&, const MltPath&)>> refs;
+  for (int j = 0; j < mix.components(); ++j) refs.push_back(reference_density_of(mix.component(j), sc.ctx));
+  const auto ref = [&refs](int j, const MltPath& x, const MltPath& y) { return refs[static_cast<size_t>(j)](x, y); };
+  const WithReferenceDensity<K, decltype(ref)> k(kernel, ref, 8);
+  const std::function<MltPath(Uniforms&)> start = [&sc](Uniforms& u) {
+    MltPath any;
+    for (int a = 0; a < 64; ++a)
+      if (auto p = sample_bdpt_path(sc.ctx, u, kMaxDepth)) return *p;
+    return any;
+  };
+  const auto r = mcmc::check_pairwise_balance<WithReferenceDensity<K, decltype(ref)>>(
+      k, start, cx.size(400, 4000), cx.seed, hash_string(name));
+  CheckResult res = pairwise_record(r, name);
+  res.details["walks"] = counters_json(*counters);
+  res.message = fmt::format("{}: {}; {} half-vector proposals", file, res.message, snapshot(*counters).proposals);
   return res;
 }
 
@@ -514,6 +552,11 @@ const bool registered = [] {
       "to 1e-9 on seeded path pairs",
       CheckKind::kDeterministic,
       [](const CheckContext& cx, const std::string& n) { return hslt_pairwise(cx, n, "dg-curved-mirrors.json"); });
+  add(p + "mixture.pairwise.glossy",
+      "The hslt integrator's kernel (bidirectional + half-vector mixture, path-dependent selection): pi c T a "
+      "symmetric to 1e-9 on seeded glossy-scene BDPT pairs, bidirectional T against its reference assembly",
+      CheckKind::kDeterministic,
+      [](const CheckContext& cx, const std::string& n) { return hslt_mixture_pairwise(cx, n, "glossy.json"); });
   add(p + "reversibility",
       "Half-vector mutation: stated T(x->y), T(y->x) against a replay of the forward and reverse walks on candidate "
       "pairs (glossy, dg-curved-mirrors; gamma = 1): positive exactly when the walks return (Sec. 5.2)",
