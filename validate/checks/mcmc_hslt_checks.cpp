@@ -267,8 +267,8 @@ struct Chart {
     return fr.s * p(0) + fr.t * p(1);
   }
 };
-constexpr double kSupportSigmas = 7.0 * 1.5;  // 7 sigma of the Gaussian, 1.5 for the curvature of the map
-constexpr int kBins = 14;
+constexpr double kSupportSigmas = 8.0;  // radial mass beyond 8 sigma: exp(-32); the map is near-linear over it
+constexpr int kBins = 24;
 
 // ---- chi-square of the proposed vertex in the tangent plane of x_1 -----------------------------
 // A fixed path light -> x_1 (rough conductor) -> camera from seeded BDPT samples.
