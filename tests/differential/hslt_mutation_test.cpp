@@ -68,6 +68,33 @@ TEST(HsltMutation, ProposalsHavePositiveDensityBothWaysAndKeepTheEndpoints) {
   EXPECT_GE(c.proposals, c.generated);
 }
 
+// Sec. 6.2-6.3: the stratified step is never larger than the BSDF step on either axis, and without
+// stratification it is sigma I.
+TEST(HsltMutation, StratifiedStepsAreBoundedByTheBsdfSteps) {
+  const Glossy g;
+  const HsltMutation strat(g.ctx), plain(g.ctx, HsltMutation::kDefaultGamma, nullptr, false);
+  Rng rng = Rng::for_sample(1, 12, 0);
+  RngUniforms u(rng);
+  int paths = 0, smaller = 0;
+  for (int a = 0; a < 20000 && paths < 40; ++a) {
+    const auto x = sample_bdpt_path(g.ctx, u, 3, 2);
+    if (!x || !strat.applicable(*x)) continue;
+    ++paths;
+    const auto X = strat.hslt_path(*x);
+    ASSERT_TRUE(X);
+    const std::vector<double> s = strat.sigmas(*x);
+    const auto L = strat.step_factors(*x, *X), L0 = plain.step_factors(*x, *X);
+    for (size_t r = 0; r < s.size(); ++r) {
+      EXPECT_TRUE(L0[r].isApprox(s[r] * Eigen::Matrix2d::Identity()) || s[r] == 0.0);
+      const Eigen::Vector2d sv = Eigen::JacobiSVD<Eigen::Matrix2d>(L[r]).singularValues();
+      EXPECT_LE(sv(0), s[r] * (1 + 1e-12));
+      smaller += sv(1) < 0.999 * s[r] ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(paths, 40);
+  EXPECT_GT(smaller, 0);  // the image-space step is the smaller one somewhere
+}
+
 TEST(HsltMutation, IntegratorRendersAFiniteImage) {
   const auto world = load_scene_at_resolution("glossy.json", 8, 8);
   Film film(8, 8);

@@ -21,7 +21,7 @@ class HsltNoReverseCheck {
     if (!m_.applicable(x)) return std::nullopt;
     const std::optional<HsltPath> X = m_.hslt_path(x);
     if (!X) return std::nullopt;
-    const HsltWalkResult r = m_.walk(*X, m_.perturbed_target(*X, m_.sigmas(x), u));
+    const HsltWalkResult r = m_.walk(*X, m_.perturbed_target(*X, m_.step_factors(x, *X), u));
     if (r.status != HsltWalkStatus::kConverged) return std::nullopt;
     MltPath y = m_.path_at(x, r.path);
     if (!m_.applicable(y) || !m_.hslt_path(y, &*X)) return std::nullopt;
@@ -41,21 +41,11 @@ class HsltNoReverseCheck {
     const std::optional<HsltPath> X = m_.hslt_path(x);
     const std::optional<HsltPath> Y = X ? m_.hslt_path(y, &*X) : std::nullopt;
     if (!Y) return p;
-    const std::vector<double> s = m_.sigmas(x);
-    std::vector<bool> dirac(s.size());
-    const Eigen::VectorXd hx = hslt_constraints(*X), hy = hslt_constraints(*Y);
-    double log_g = 0.0;
-    for (size_t r = 0; r < s.size(); ++r) {
-      dirac[r] = !(s[r] > 0.0);
-      const Eigen::Vector2d d = hy.segment<2>(static_cast<Eigen::Index>(2 * r)) - hx.segment<2>(static_cast<Eigen::Index>(2 * r));
-      if (dirac[r]) {
-        if (!(d.norm() < HsltMutation::kDiracHoldTolerance)) return p;
-        continue;
-      }
-      log_g += -std::log(2.0 * kPi * s[r] * s[r]) - d.squaredNorm() / (2.0 * s[r] * s[r]);
-    }
+    std::vector<bool> dirac;
+    double g = 0.0;
+    if (!m_.perturbation_density(m_.step_factors(x, *X), *X, *Y, &g, &dirac)) return p;
     p.structure = true;
-    p.perturbation = std::exp(log_g);
+    p.perturbation = g;
     p.measure = m_.measure_factor(*Y, dirac);
     return p;
   }

@@ -6,6 +6,7 @@
 
 #include "lib/differential/hslt_block_lu.h"
 #include "lib/differential/hslt_constraints.h"
+#include "lib/camera/camera.h"
 #include "lib/material/bsdf.h"
 #include "lib/material/half_vector.h"
 #include "lib/path/dirac.h"
@@ -41,8 +42,10 @@ HsltCountsSnapshot snapshot(const HsltCounters& c) {
   return s;
 }
 
-HsltMutation::HsltMutation(const PathContext& ctx, double gamma, std::shared_ptr<HsltCounters> counters)
-    : ctx_(&ctx), gamma_(gamma), counters_(counters ? std::move(counters) : std::make_shared<HsltCounters>()) {
+HsltMutation::HsltMutation(const PathContext& ctx, double gamma, std::shared_ptr<HsltCounters> counters, bool stratify,
+                           double image_fraction)
+    : ctx_(&ctx), gamma_(gamma), counters_(counters ? std::move(counters) : std::make_shared<HsltCounters>()),
+      stratify_(stratify), image_fraction_(image_fraction) {
   options_.visibility = true;  // the proposal must be a path with f > 0: no shape between vertices
   options_.side = HsltProjectionSide::kHeuristic;  // Sec. 5.1, Table 2
 }
@@ -108,17 +111,91 @@ std::vector<double> HsltMutation::sigmas(const MltPath& x) const {
   return s;
 }
 
-Eigen::VectorXd HsltMutation::perturbed_target(const HsltPath& X, const std::vector<double>& sigma, Uniforms& u) const {
+std::vector<Eigen::Matrix2d> HsltMutation::step_factors(const MltPath& x, const HsltPath& X) const {
+  const std::vector<double> s = sigmas(x);
+  std::vector<Eigen::Matrix2d> L(s.size());
+  for (size_t r = 0; r < s.size(); ++r) L[r] = s[r] * Eigen::Matrix2d::Identity();
+  if (!stratify_) return L;
+  // Sec. 6.2: the camera ray differentials at x_{k-1}, on its tangent plane, in its (u, v).
+  const int k = X.segments();
+  const HsltVertex& v = X.vertices[static_cast<size_t>(k - 1)];
+  const Camera& cam = ctx_->world->camera();
+  const std::optional<Vec2> raster = path_raster(*ctx_, x);
+  if (!raster) return L;
+  const CameraRay cr = cam.generate_ray(*raster, Vec2(0.5));
+  if (!cr.ray.has_differentials) return L;
+  const auto on_plane = [&](const Vec3& o, const Vec3& d) -> std::optional<Vec3> {
+    const double den = glm::dot(d, v.ng);
+    if (!(std::abs(den) > 1e-12)) return std::nullopt;
+    return o + d * (glm::dot(v.p - o, v.ng) / den);
+  };
+  const auto p0 = on_plane(cr.ray.o, cr.ray.d), pu = on_plane(cr.ray.rx_o, cr.ray.rx_d),
+             pv = on_plane(cr.ray.ry_o, cr.ray.ry_d);
+  if (!p0 || !pu || !pv) return L;
+  Eigen::Matrix<double, 3, 2> T;
+  T << v.dpdu.x, v.dpdv.x, v.dpdu.y, v.dpdv.y, v.dpdu.z, v.dpdv.z;
+  const Eigen::Matrix2d G = T.transpose() * T;
+  if (!(std::abs(G.determinant()) > 0)) return L;
+  const double scale = image_fraction_ * std::max(cam.width(), cam.height());
+  const auto to_uv = [&](const Vec3& d) {
+    return Eigen::Vector2d(G.inverse() * (T.transpose() * Eigen::Vector3d(d.x, d.y, d.z)) * scale);
+  };
+  const Eigen::Vector2d du = to_uv(*pu - *p0), dv = to_uv(*pv - *p0);
+  // Eq. 9: D_i = (J^{-1})_{k-1, i}, dx_{k-1} = D_i dh_i (Kaplanyan 2014, Sec. 6.2, Sec. 7).
+  std::vector<Eigen::Matrix2d> D;
+  if (!hslt_inverse_last_block_row(hslt_constraint_blocks(X), &D)) return L;
+  double sum = 0.0;
+  for (double si : s) sum += si;
+  if (!(sum > 0)) return L;
+  for (size_t r = 0; r < s.size(); ++r) {
+    if (!(s[r] > 0)) continue;
+    if (!(std::abs(D[r].determinant()) > 1e-300)) continue;
+    const Eigen::Matrix2d Dinv = D[r].inverse();
+    const Eigen::Vector2d hu = Dinv * du, hv = Dinv * dv;
+    const double l1 = hu.norm();
+    if (!(l1 > 0) || !std::isfinite(l1) || !hv.allFinite()) continue;
+    const Eigen::Vector2d e1 = hu / l1, e2(-e1(1), e1(0));
+    const double l2 = std::abs(hv.dot(e2));
+    const double w = s[r] / sum;  // Sec. 6.3 bandwidth weight
+    const double s1 = std::max(std::min(s[r], w * l1), 1e-3 * s[r]);
+    const double s2 = std::max(std::min(s[r], w * l2), 1e-3 * s[r]);
+    Eigen::Matrix2d E;
+    E.col(0) = e1;
+    E.col(1) = e2;
+    L[r] = E * Eigen::Vector2d(s1, s2).asDiagonal();
+  }
+  return L;
+}
+
+Eigen::VectorXd HsltMutation::perturbed_target(const HsltPath& X, const std::vector<Eigen::Matrix2d>& L, Uniforms& u) const {
   Eigen::VectorXd t = hslt_constraints(X);
-  for (size_t r = 0; r < sigma.size(); ++r) {
-    if (!(sigma[r] > 0.0)) continue;
+  for (size_t r = 0; r < L.size(); ++r) {
+    if (L[r].isZero(0.0)) continue;
     const Vec2 w = u.next2();
-    const double len = sigma[r] * std::sqrt(-2.0 * std::log1p(-w.x));  // Box-Muller
+    const double len = std::sqrt(-2.0 * std::log1p(-w.x));  // Box-Muller
     const double phi = 2.0 * kPi * w.y;
-    t[static_cast<Eigen::Index>(2 * r)] += len * std::cos(phi);
-    t[static_cast<Eigen::Index>(2 * r + 1)] += len * std::sin(phi);
+    t.segment<2>(static_cast<Eigen::Index>(2 * r)) += L[r] * Eigen::Vector2d(len * std::cos(phi), len * std::sin(phi));
   }
   return t;
+}
+
+bool HsltMutation::perturbation_density(const std::vector<Eigen::Matrix2d>& L, const HsltPath& X, const HsltPath& Y,
+                                        double* g, std::vector<bool>* dirac) const {
+  const Eigen::VectorXd hx = hslt_constraints(X), hy = hslt_constraints(Y);
+  dirac->assign(L.size(), false);
+  double log_g = 0.0;
+  for (size_t r = 0; r < L.size(); ++r) {
+    const Eigen::Vector2d d = hy.segment<2>(static_cast<Eigen::Index>(2 * r)) - hx.segment<2>(static_cast<Eigen::Index>(2 * r));
+    if (L[r].isZero(0.0)) {
+      (*dirac)[r] = true;
+      if (!(d.norm() < kDiracHoldTolerance)) return false;
+      continue;
+    }
+    const Eigen::Vector2d z = L[r].inverse() * d;
+    log_g += -std::log(2.0 * kPi * std::abs(L[r].determinant())) - 0.5 * z.squaredNorm();
+  }
+  *g = std::exp(log_g);
+  return true;
 }
 
 HsltWalkResult HsltMutation::walk(const HsltPath& X, const Eigen::VectorXd& target) const {
@@ -169,22 +246,11 @@ HsltMutation::DensityParts HsltMutation::density_parts(const MltPath& x, const M
   if (!X) return p;
   const std::optional<HsltPath> Y = hslt_path(y, &*X);
   if (!Y) return p;
-  const std::vector<double> sigma = sigmas(x);
-  std::vector<bool> dirac(sigma.size());
-  const Eigen::VectorXd hx = hslt_constraints(*X), hy = hslt_constraints(*Y);
-  double log_g = 0.0;
-  for (size_t r = 0; r < sigma.size(); ++r) {
-    dirac[r] = !(sigma[r] > 0.0);
-    const Eigen::Vector2d d = hy.segment<2>(static_cast<Eigen::Index>(2 * r)) - hx.segment<2>(static_cast<Eigen::Index>(2 * r));
-    if (dirac[r]) {
-      if (!(d.norm() < kDiracHoldTolerance)) return p;
-      continue;
-    }
-    const double s2 = sigma[r] * sigma[r];
-    log_g += -std::log(2.0 * kPi * s2) - d.squaredNorm() / (2.0 * s2);
-  }
+  std::vector<bool> dirac;
+  double g = 0.0;
+  if (!perturbation_density(step_factors(x, *X), *X, *Y, &g, &dirac)) return p;
   p.structure = true;
-  p.perturbation = std::exp(log_g);
+  p.perturbation = g;
   p.measure = measure_factor(*Y, dirac);
   if (!(p.perturbation > 0.0) || !(p.measure > 0.0)) return p;
   p.forward_lands = lands(*X, *Y);
@@ -215,7 +281,7 @@ std::optional<MltPath> HsltMutation::propose(const MltPath& x, Uniforms& u) cons
   }
   c.proposals.fetch_add(1, kRelaxed);
   // Fig. 12: mutate_half_vectors (Sec. 6.1), h_to_positions (Sec. 5), reverse check (Sec. 5.2).
-  const Eigen::VectorXd target = perturbed_target(*X, sigmas(x), u);
+  const Eigen::VectorXd target = perturbed_target(*X, step_factors(x, *X), u);
   const HsltWalkResult r = walk(*X, target);
   c.forward_status[static_cast<size_t>(r.status)].fetch_add(1, kRelaxed);
   c.iterations_all.fetch_add(r.iterations, kRelaxed);

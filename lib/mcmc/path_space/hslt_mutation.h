@@ -17,17 +17,29 @@
 //     (specular) vertices keep their h_i^perp (Sec. 5.1: "their half vectors always remain at a
 //     fixed position"; the value of x, ~1e-8 for traced chains, not exactly 0, so that the reverse
 //     move targets what the forward one kept);
+//     Stratification (Sec. 6.2-6.3, on by default): the ray differentials of the camera ray through
+//     x_{k-1} (one pixel in x and y) meet the tangent plane of x_{k-1} in dp_u, dp_v, scaled to 2%
+//     of the larger image side, in (u, v) of x_{k-1}; Eq. 9 gives the half-vector changes that
+//     would produce them, dh_{u,i} = D_i^{-1} duv_u, dh_{v,i} = D_i^{-1} duv_v (D_i the blocks of the
+//     last block row of J^{-1}, hslt_inverse_last_block_row); the step is rotated to the
+//     orthonormalised basis e1 = dh_u / |dh_u|, e2 perpendicular, with per-axis standard deviation
+//     s_a = max(min(sigma_i, w_i l_a), 1e-3 sigma_i), l_1 = |dh_u|, l_2 = |<dh_v, e2>|, and the
+//     bandwidth weights w_i = sigma_i / sum_j sigma_j (Sec. 6.3, over the non-Dirac vertices). The
+//     desired change is taken as the standard deviation (the paper's supplement has the exact
+//     Phong-lobe form, Sec. 7: not built). Where a D_i is singular or no differential exists the
+//     vertex keeps sigma_i I. All of it is a function of x: the reverse density uses y's steps;
 //  3. h_to_positions: the predictor-corrector walk of hslt_walk.h (Sec. 5.1) moves x_1 .. x_{k-1}
 //     to the new constraints, visibility on, projection side by the Table 2 heuristic; the result
 //     is rebuilt from its surfaces at the walk's (u, v) (Scene::surface_at);
 //  4. reverse check (Sec. 5.2): the walk from y back to H^perp(x) must return to x (vertices within
 //     kLandingTolerance); a non-reversible move is rejected (propose returns nothing).
 //
-// Proposal density in the path measure (area product of the interior vertices, endpoints fixed):
+// Proposal density in the path measure (area product of the interior vertices, endpoints fixed;
+// N(.; L L^T) below is the 2D normal density of the step of vertex i, L_i from x):
 // the density in h^perp times |dH^perp / dX| (the change of measure of Eq. 3-7 at fixed endpoints,
 // Eq. 4 without the geometric terms; the first equation of Sec. 5.2 writes the same factor as
 // |J|^{-1} with J read as dX/dH^perp):
-//   T(x -> y) = prod_{i non-Dirac} N(h_i^perp(y) - h_i^perp(x); sigma_i(x))  * |det J_area(y)|
+//   T(x -> y) = prod_{i non-Dirac} N(h_i^perp(y) - h_i^perp(x); L_i L_i^T(x))  * |det J_area(y)|
 //               * prod_{i Dirac} |d omega_prev / d h_i| / |<h_i, n_i>|
 //               * [walk x -> H^perp(y) lands at y] * [walk y -> H^perp(x) lands at x],
 // J_area = dH^perp / d(x_1 .. x_{k-1}) (Eq. 11) in area measure (J_uv diag(1/|dp/du x dp/dv|)),
@@ -48,8 +60,8 @@
 // The two landing indicators make T a function of the pair alone (both walks are deterministic):
 // propose samples exactly T (the forward walk lands at y by construction, the reverse walk is the
 // rejection test), and T(y -> x) contains the same pair of indicators, so the Metropolis-Hastings
-// ratio is exact. Not built: the subspace jump of Sec. 5.2, the image-space stratification and
-// bandwidth weights of Sec. 6.2-6.3, the anisotropic Phong offset of Sec. 7.
+// ratio is exact. Not built: the subspace jump of Sec. 5.2, the Phong-lobe form of the anisotropic
+// offset of Sec. 7 (a Gaussian is used).
 #pragma once
 
 #include <array>
@@ -101,8 +113,13 @@ class HsltMutation {
   static constexpr double kLandingTolerance = 1e-6;   // scene units: "the vertex positions match" (Sec. 5.2)
   static constexpr double kDiracHoldTolerance = 1e-8; // |h_i^perp(y) - h_i^perp(x)| at a Dirac vertex
 
+  static constexpr double kImageFraction = 0.02;     // Sec. 6.2: desired change of x_{k-1}, 2% of the image
+
+  // stratify: the step sizes of Sec. 6.2-6.3 (min of the BSDF step and the weighted ray-differential
+  // step per axis); false: the isotropic BSDF steps of Sec. 6.1 only.
   explicit HsltMutation(const PathContext& ctx, double gamma = kDefaultGamma,
-                        std::shared_ptr<HsltCounters> counters = nullptr);
+                        std::shared_ptr<HsltCounters> counters = nullptr, bool stratify = true,
+                        double image_fraction = kImageFraction);
 
   std::optional<MltPath> propose(const MltPath& x, Uniforms& u) const;
   double density(const MltPath& x, const MltPath& y) const;
@@ -113,8 +130,16 @@ class HsltMutation {
   // vertices in the frames and with the indices of `frames_of` (nothing when a vertex is on
   // another side of its surface than in frames_of, or the structure differs).
   std::optional<HsltPath> hslt_path(const MltPath& x, const HsltPath* frames_of = nullptr) const;
-  // sigma_i of the interior vertices (index 0 = x_1); 0 at Dirac vertices.
+  // sigma_i of the interior vertices (index 0 = x_1): the BSDF steps of Sec. 6.1; 0 at Dirac vertices.
   std::vector<double> sigmas(const MltPath& x) const;
+  // The step of every interior vertex: delta_i = L_i z, z a standard 2D normal (covariance L L^T);
+  // zero at Dirac vertices. Without stratification L_i = sigma_i I; with it (Sec. 6.2-6.3, see the
+  // file comment) L_i = [e1 e2] diag(s_1, s_2).
+  std::vector<Eigen::Matrix2d> step_factors(const MltPath& x, const HsltPath& X) const;
+  // prod_{non-Dirac} N(h_i(Y) - h_i(X); L_i L_i^T) into *g, the Dirac flags into *dirac; false when a
+  // Dirac vertex's h^perp moved by more than kDiracHoldTolerance.
+  bool perturbation_density(const std::vector<Eigen::Matrix2d>& L, const HsltPath& X, const HsltPath& Y, double* g,
+                            std::vector<bool>* dirac) const;
   // The walk from X to `target` with the mutation's options.
   HsltWalkResult walk(const HsltPath& X, const Eigen::VectorXd& target) const;
   // The MltPath of x with its interior vertices at the walk's result (rebuilt from the surfaces).
@@ -133,9 +158,10 @@ class HsltMutation {
   // |det J_area(Y)| * prod_{Dirac} |d omega_prev / d h_i| / |<h_i, n_i>| (0 when the block LU fails).
   double measure_factor(const HsltPath& Y, const std::vector<bool>& dirac) const;
   // The perturbed target of a proposal (Box-Muller from two uniforms per non-Dirac vertex).
-  Eigen::VectorXd perturbed_target(const HsltPath& X, const std::vector<double>& sigma, Uniforms& u) const;
+  Eigen::VectorXd perturbed_target(const HsltPath& X, const std::vector<Eigen::Matrix2d>& L, Uniforms& u) const;
 
   double gamma() const { return gamma_; }
+  bool stratify() const { return stratify_; }
   const PathContext& context() const { return *ctx_; }
   const std::shared_ptr<HsltCounters>& counters() const { return counters_; }
   HsltWalkOptions walk_options() const { return options_; }
@@ -144,6 +170,8 @@ class HsltMutation {
   const PathContext* ctx_;
   double gamma_;
   std::shared_ptr<HsltCounters> counters_;
+  bool stratify_ = true;
+  double image_fraction_ = kImageFraction;
   HsltWalkOptions options_;
 };
 
