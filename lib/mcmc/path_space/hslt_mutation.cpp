@@ -1,6 +1,7 @@
 #include "lib/mcmc/path_space/hslt_mutation.h"
 
 #include <cmath>
+#include <stdexcept>
 
 #include <fmt/format.h>
 
@@ -299,13 +300,13 @@ std::optional<MltPath> HsltMutation::propose(const MltPath& x, Uniforms& u) cons
 }
 
 PathMutationList make_hslt_mixture(const PathContext& ctx, const PathMutationSettings& s,
-                                   const std::shared_ptr<HsltCounters>& counters) {
+                                   const std::shared_ptr<HsltCounters>& counters, double gamma, bool stratify) {
   const PathMutationInfo* bidir = find_path_mutation("bidirectional");
   const PathMutationInfo* hslt = find_path_mutation("hslt");
   PathMutationList out;
   out.push_back(bidir->make(ctx, s, bidir->weight));
   out.push_back(std::make_shared<const PathProposalMutation<HsltMutation>>(
-      "hslt", hslt->weight, HsltMutation(ctx, HsltMutation::kDefaultGamma, counters), hslt_applies));
+      "hslt", hslt->weight, HsltMutation(ctx, gamma, counters, stratify), hslt_applies));
   return out;
 }
 
@@ -317,8 +318,15 @@ int64_t render_hslt(const World& world, const RenderSettings& settings, Film& fi
   using namespace path_space;
   const auto counters = std::make_shared<HsltCounters>();
   MltOptions o;
-  o.mutations = [counters](const PathContext& ctx, const PathMutationSettings& s) {
-    return make_hslt_mixture(ctx, s, counters);
+  const auto param = [&settings](const char* name, double fallback) {
+    const auto it = settings.params.find(name);
+    return it == settings.params.end() ? fallback : it->second;
+  };
+  const double gamma = param("gamma", HsltMutation::kDefaultGamma);
+  const bool stratify = param("stratify", 1.0) != 0.0;
+  if (!(gamma > 0.0)) throw std::invalid_argument("hslt: parameter 'gamma' must be > 0");
+  o.mutations = [counters, gamma, stratify](const PathContext& ctx, const PathMutationSettings& s) {
+    return make_hslt_mixture(ctx, s, counters, gamma, stratify);
   };
   const MltStats stats = run_mlt(world, settings, film, o);
   if (settings.report) {

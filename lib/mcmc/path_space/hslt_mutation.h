@@ -183,7 +183,8 @@ bool hslt_applies(const HsltMutation& m, const MltPath& x);
 // normalised over the mutations that apply to x), run by run_mlt's one chain loop (mlt_chain.h).
 // `counters` receives the half-vector mutation's walk statistics.
 PathMutationList make_hslt_mixture(const PathContext& ctx, const PathMutationSettings& s,
-                                   const std::shared_ptr<HsltCounters>& counters);
+                                   const std::shared_ptr<HsltCounters>& counters,
+                                   double gamma = HsltMutation::kDefaultGamma, bool stratify = true);
 
 }  // namespace tb::path_space
 
@@ -191,5 +192,7 @@ namespace tb {
 // The renderer entry point for the integrator registry (name "hslt"): run_mlt over
 // make_hslt_mixture; prints the statistics of Kaplanyan 2014, Table 3 (iterations per converged /
 // per forward walk, generation rate, non-reversible fraction, acceptance, mutations per second).
+// RenderSettings::params: "gamma" (Sec. 6.1 step scale, default 0.1), "stratify" (0: the BSDF
+// steps of Sec. 6.1 only; default 1: Sec. 6.2-6.3).
 int64_t render_hslt(const World& world, const RenderSettings& settings, Film& film);
 }  // namespace tb
