@@ -131,6 +131,10 @@ int compare_images(const CompareArgs& a) {
     fmt::print("  image sums A / B: R {:.5f}, G {:.5f}, B {:.5f}; A rescaled to B's sums: rRMSE {:.4g}, relMSE {:.4g}\n",
                sb[0] > 0 ? sa[0] / sb[0] : 0.0, sb[1] > 0 ? sa[1] / sb[1] : 0.0, sb[2] > 0 ? sa[2] / sb[2] : 0.0,
                es.rrmse, compare::relmse_eps(scaled, mb));
+    std::string bins;
+    for (const auto& b : compare::relmse_by_brightness(ma, mb))
+      bins += fmt::format("{}{:.0f}% [{:.3g}, {:.3g}]", bins.empty() ? "" : ", ", 100.0 * b.share, b.lo, b.hi);
+    fmt::print("  relMSE by reference brightness, fifths of the pixels dark to bright: {}\n", bins);
   }
   fmt::print("{} (combined p = {:.4g})\n", r.rejects() ? "DIFFERENT" : "consistent", r.p_value());
   if (!a.json_out.empty()) {

@@ -75,6 +75,44 @@ inline double relmse_eps(const std::vector<Rgb>& img, const std::vector<Rgb>& re
   return k > 0 ? s / static_cast<double>(k) : 0.0;
 }
 
+// Where relmse_eps comes from: pixels sorted by the reference's mean over channels and cut into
+// `bins` groups of equal count (dark to bright); per group its share of the total (the shares sum
+// to 1) and its brightness range. An MCMC estimator that puts its samples where the image is
+// bright shows its error in the dark groups; a path tracer spreads it more evenly.
+struct BrightnessBin {
+  double lo = 0.0, hi = 0.0;  // reference brightness range of the group
+  double share = 0.0;         // the group's part of sum (I - R)^2 / (R^2 + eps)
+};
+inline std::vector<BrightnessBin> relmse_by_brightness(const std::vector<Rgb>& img, const std::vector<Rgb>& ref,
+                                                       int bins = 5, double eps = 0.01) {
+  const size_t n = std::min(img.size(), ref.size());
+  std::vector<std::pair<double, double>> px;  // (brightness, error summed over channels)
+  px.reserve(n);
+  double total = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    double e = 0.0;
+    for (int c = 0; c < 3; ++c) {
+      const double r = ref[i][c], x = img[i][c];
+      if (std::isfinite(r) && std::isfinite(x)) e += (x - r) * (x - r) / (r * r + eps);
+    }
+    px.push_back({(ref[i][0] + ref[i][1] + ref[i][2]) / 3.0, e});
+    total += e;
+  }
+  std::sort(px.begin(), px.end());
+  std::vector<BrightnessBin> out;
+  if (px.empty() || bins < 1) return out;
+  for (int b = 0; b < bins; ++b) {
+    const size_t lo = px.size() * static_cast<size_t>(b) / static_cast<size_t>(bins);
+    const size_t hi = px.size() * static_cast<size_t>(b + 1) / static_cast<size_t>(bins);
+    if (hi <= lo) continue;
+    BrightnessBin bin{px[lo].first, px[hi - 1].first, 0.0};
+    for (size_t i = lo; i < hi; ++i) bin.share += px[i].second;
+    bin.share = total > 0.0 ? bin.share / total : 0.0;
+    out.push_back(bin);
+  }
+  return out;
+}
+
 // ref_var_of_mean: per pixel the variance of the reference value itself (may be empty).
 inline RelativeError relative_error(const std::vector<Rgb>& img, const std::vector<Rgb>& ref,
                                     const std::vector<Rgb>& ref_var_of_mean, double floor) {

@@ -2,6 +2,8 @@
 // Fig. 1 bottom), n = 1..16, against the bare cost of the n·N·T conditional pdf evaluations it makes.
 //   BM_MmisBudget/n      one estimate: N / (nT) realisations of Eq. 6, sampling included
 //   BM_MmisEvaluate/n    Eq. 6 evaluated over pairs drawn beforehand (the estimator without sampling)
+//   BM_MmisWeights/n     the per-sample MMIS weights alone (for_each_mmis_weight, what a renderer calls
+//                        before splatting its RGB contribution) over the same pairs: no f
 //   BM_BarePdfEvals/n    the same n·N·T evaluations of p(x | t) over pre-sampled (x, t), nothing else
 //   BM_BareDraws         drawing the N pairs (t, x) into a preallocated array, nothing else (independent of n)
 //   BM_BareIntegrand     the N evaluations of f at pre-sampled x, nothing else (independent of n)
@@ -62,6 +64,31 @@ void BM_MmisEvaluate(benchmark::State& state) {
   state.counters["estimates/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_MmisEvaluate)->ArgsProduct({{1, 2, 4, 8, 16}, {0, 20, 200}});
+
+// The per-sample weights (for_each_mmis_weight) over the pairs of BM_MmisEvaluate, without f: the Eq. 6
+// denominators, the own densities and the weights, which is all the n·N·T pdf evaluations pay for.
+void BM_MmisWeights(benchmark::State& state) {
+  const Fig1Bottom b = make_fig1_bottom(static_cast<int>(state.range(1)));
+  const int n = static_cast<int>(state.range(0));
+  const int realisations = kBudget / (n * static_cast<int>(b.techniques.size()));
+  Rng rng(42);
+  RngUniforms u(rng);
+  const std::span<const ConditionalNormal1D> tech(b.techniques);
+  const std::vector<int> counts(b.techniques.size(), n);
+  using NC = NoClassical<double>;
+  std::vector<MmisDraw<double, ConditionalNormal1D::Aux>> draws;
+  for (int r = 0; r < realisations; ++r)
+    draws.push_back(draw_mmis(std::span<const NC>{}, std::span<const int>{}, tech, std::span<const int>(counts), u));
+  for (auto _ : state) {
+    double s = 0.0;
+    for (const auto& d : draws)
+      for_each_mmis_weight(std::span<const NC>{}, std::span<const int>{}, tech, d,
+                           [&](double, const MmisWeight& w) { s += w.weight; });
+    benchmark::DoNotOptimize(s);
+  }
+  state.counters["estimates/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_MmisWeights)->ArgsProduct({{1, 2, 4, 8, 16}, {0, 20, 200}});
 
 void BM_BarePdfEvals(benchmark::State& state) {
   const Fig1Bottom b = make_fig1_bottom(static_cast<int>(state.range(1)));

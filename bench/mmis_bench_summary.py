@@ -2,11 +2,13 @@
 """Summarises estimators_bench JSON runs (docs/estimators.md, "Benchmark").
 
 For each cost of p(x | t) (the second benchmark argument): the log-log least-squares slope of CPU
-time against n = 1, 2, 4, 8, 16 for BM_MmisBudget, BM_MmisEvaluate and BM_BarePdfEvals, and the
-overheads at n = 1 and n = 16: the estimate over the bare pdf evaluations, and the estimate over
-all the bare work an estimate must do (N pair draws + N evaluations of f + n·N·T pdf evaluations,
-when BM_BareDraws and BM_BareIntegrand are in the file). Several files (rounds) are summarised
-one by one and then by the median over rounds of each time.
+time against n = 1, 2, 4, 8, 16 for BM_MmisBudget, BM_MmisEvaluate, BM_MmisWeights and
+BM_BarePdfEvals, and the overheads at n = 1 and n = 16: each over the bare pdf evaluations, and the
+estimate over all the bare work an estimate must do (N pair draws + N evaluations of f + n·N·T pdf
+evaluations, when BM_BareDraws and BM_BareIntegrand are in the file). Then, per benchmark, whether
+the target of docs/estimators.md holds: slope 1 ± 0.1 and at most 2x the bare pdf evaluations at
+every n. Several files (rounds) are summarised one by one and then by the median over rounds of
+each time.
 
 usage: mmis_bench_summary.py run1.json [run2.json ...]
 """
@@ -41,26 +43,39 @@ def summarise(t, label):
     print(f"== {label}")
     for cost in (0, 20, 200):
         row = {}
-        for bm in ("BM_MmisBudget", "BM_MmisEvaluate", "BM_BarePdfEvals"):
+        for bm in ("BM_MmisBudget", "BM_MmisEvaluate", "BM_MmisWeights", "BM_BarePdfEvals"):
             ys = [t.get(f"{bm}/{n}/{cost}") for n in NS]
             if all(y is not None for y in ys):
                 row[bm] = ys
-        if "BM_MmisBudget" not in row or "BM_BarePdfEvals" not in row:
+        if "BM_BarePdfEvals" not in row:
             continue
-        b, bare = row["BM_MmisBudget"], row["BM_BarePdfEvals"]
-        line = (f"cost {cost:3d}: slope budget {slope(b):.3f}, bare pdf {slope(bare):.3f}"
-                + (f", evaluate {slope(row['BM_MmisEvaluate']):.3f}" if "BM_MmisEvaluate" in row else "")
-                + f"; budget/bare pdf n=1 {b[0] / bare[0]:.2f}x, n=16 {b[-1] / bare[-1]:.2f}x")
+        bare = row["BM_BarePdfEvals"]
+        line = f"cost {cost:3d}: bare pdf slope {slope(bare):.3f}, n=1 {bare[0] * 1e6:.2f} us"
+        b = row.get("BM_MmisBudget")
+        if b:
+            line += (f"; budget slope {slope(b):.3f}, budget/bare pdf n=1 {b[0] / bare[0]:.2f}x,"
+                     f" n=16 {b[-1] / bare[-1]:.2f}x")
         if "BM_MmisEvaluate" in row:
             e = row["BM_MmisEvaluate"]
-            line += f"; evaluate/bare pdf n=1 {e[0] / bare[0]:.2f}x, n=16 {e[-1] / bare[-1]:.2f}x"
+            line += (f"; evaluate slope {slope(e):.3f}, evaluate/bare pdf n=1 {e[0] / bare[0]:.2f}x,"
+                     f" n=16 {e[-1] / bare[-1]:.2f}x")
+        if "BM_MmisWeights" in row:
+            w = row["BM_MmisWeights"]
+            line += (f"; weights slope {slope(w):.3f}, weights/bare pdf n=1 {w[0] / bare[0]:.2f}x,"
+                     f" n=16 {w[-1] / bare[-1]:.2f}x")
         draws, fx = t.get(f"BM_BareDraws/{cost}"), t.get("BM_BareIntegrand")
-        if draws is not None and fx is not None:
+        if b and draws is not None and fx is not None:
             work = [draws + fx + p for p in bare]
             line += (f"; bare work slope {slope(work):.3f}, budget/bare work n=1 {b[0] / work[0]:.2f}x,"
-                     f" n=16 {b[-1] / work[-1]:.2f}x (draws {draws * 1e6:.2f} us, f {fx * 1e6:.2f} us,"
-                     f" pdf n=1 {bare[0] * 1e6:.2f} us)")
+                     f" n=16 {b[-1] / work[-1]:.2f}x (draws {draws * 1e6:.2f} us, f {fx * 1e6:.2f} us)")
         print(line)
+        for bm in ("BM_MmisBudget", "BM_MmisEvaluate", "BM_MmisWeights"):
+            if bm in row:
+                ys = row[bm]
+                worst = max(y / p for y, p in zip(ys, bare))
+                ok = abs(slope(ys) - 1.0) <= 0.1 and worst <= 2.0
+                print(f"    target {bm} cost {cost}: slope {slope(ys):.3f}, worst ratio to bare pdf {worst:.2f}x"
+                      f" -> {'met' if ok else 'MISSED'}")
 
 
 def main():

@@ -10,10 +10,11 @@
 // Cost: S·(C + P) pdf evaluations for S samples, C classical techniques in use and P sampled
 // auxiliaries: with n pairs from each of T marginal techniques, (nT)² per realisation.
 //
-// Three layers, each used by the next: draw_mmis draws the pairs; for_each_mmis_weight computes
-// each drawn sample's MMIS weight (mmis_weights collects them, e.g. for a renderer that splats RGB
-// contributions); evaluate_mmis sums f(x) / D(x) over the same weights, so the scalar estimate of
-// the analytic checks and the per-sample weights of a renderer come from one function.
+// Three layers, each used by the next: draw_mmis draws the pairs; mmis_weight gives one drawn sample's
+// MMIS weight with its own technique, for_each_mmis_weight every sample's (mmis_weights collects them),
+// e.g. for a renderer that splats RGB contributions; evaluate_mmis sums f(x) / D(x) over the same
+// weights, so the scalar estimate of the analytic checks and the per-sample weights of a renderer come
+// from one function.
 #pragma once
 
 #include <cstdint>
@@ -115,6 +116,13 @@ struct MmisWeight {
   double contribution(double f) const { return safe_ratio(f, denominator); }
 };
 
+// The auxiliary t of a weighted sample's own conditional technique (e.g. the prefix a filtered path was
+// conditioned on), nullptr for a sample of a classical technique.
+template <class X, class Aux>
+const Aux* mmis_own_aux(const MmisDraw<X, Aux>& d, const MmisWeight& w) {
+  return w.classical ? nullptr : &d.aux[w.sample - d.classical_samples()].t;
+}
+
 template <class X>
 struct MmisWeightedSample {
   X x;
@@ -130,60 +138,100 @@ int64_t mmis_pdf_evals_per_sample(std::span<const int> classical_counts, const M
   return c + static_cast<int64_t>(d.aux.size());
 }
 
-// Calls visit(x, MmisWeight) for every drawn sample whose x did not fail, in the order of d.xs.
-// The Eq. 6 denominator sums the classical terms in technique order, then the conditional terms
-// in pair order, whatever the sample's own technique (the same order, so the same round-off, for
-// every sample). Nothing is allocated; the only calls are to the techniques' pdfs and to visit.
+namespace mmis_detail {
+
+// The Eq. 6 denominator of one draw at a sample x: Σ_c n_c p_c(x) (the split classical sum), then
+// Σ_(i,j) p_i(x | t_ij) in pair order, whatever the sample's own technique (the same order, so the same
+// round-off, for every sample). The sample's own term is one of the summands: each sum runs in two
+// branch-free halves around it, so it is evaluated once, picked out without a per-term test and added in
+// its place. Nothing is allocated; the only calls are to the techniques' pdfs.
+template <class C, class M>
+struct Eq6Denominator {
+  using X = typename M::Sample;
+  std::span<const C> classical;
+  std::span<const int> classical_counts;
+  const M* mar;
+  const typename MmisDraw<X, typename M::Aux>::Pair* aux;
+  size_t np;
+
+  double classical_range(const X& x, size_t begin, size_t end, double den) const {
+    for (size_t c = begin; c < end; ++c)
+      if (classical_counts[c] > 0) den += classical_counts[c] * static_cast<double>(classical[c].pdf(x));
+    return den;
+  }
+  double marginal_range(const X& x, size_t begin, size_t end, double den) const {
+    for (size_t k = begin; k < end; ++k) den += static_cast<double>(mar[aux[k].technique].pdf(x, aux[k].t));
+    return den;
+  }
+  // Sample s of classical technique c (classical_counts[c] > 0, so its term is a summand).
+  MmisWeight of_classical(const X& x, size_t s, size_t c) const {
+    MmisWeight w;
+    w.sample = s;
+    w.technique = c;
+    w.classical = true;
+    const double before = classical_range(x, 0, c, 0.0);
+    w.own_pdf = classical_counts[c] * static_cast<double>(classical[c].pdf(x));
+    w.denominator = marginal_range(x, 0, np, classical_range(x, c + 1, classical.size(), before + w.own_pdf));
+    w.weight = safe_ratio(w.own_pdf, w.denominator);
+    return w;
+  }
+  // Sample s drawn from pair k, its own conditional technique p_i(x | t_ij).
+  MmisWeight of_pair(const X& x, size_t s, size_t k) const {
+    MmisWeight w;
+    w.sample = s;
+    w.technique = aux[k].technique;
+    const double before = marginal_range(x, 0, k, classical_range(x, 0, classical.size(), 0.0));
+    w.own_pdf = static_cast<double>(mar[aux[k].technique].pdf(x, aux[k].t));
+    w.denominator = marginal_range(x, k + 1, np, before + w.own_pdf);
+    w.weight = safe_ratio(w.own_pdf, w.denominator);
+    return w;
+  }
+};
+
+template <class C, class M>
+Eq6Denominator<C, M> eq6_denominator(std::span<const C> classical, std::span<const int> classical_counts,
+                                     std::span<const M> marginal, const MmisDraw<typename M::Sample, typename M::Aux>& d) {
+  return {classical, classical_counts, marginal.data(), d.aux.data(), d.aux.size()};
+}
+
+}  // namespace mmis_detail
+
+// The MMIS weight of one drawn sample, d.xs[s] (West et al. 2022, Eq. 6), with its own technique (a
+// classical technique, or the marginal technique of its pair, whose auxiliary t — e.g. a path prefix — is
+// d.aux[s - d.classical_samples()].t); empty when s is out of range or the sample failed. Costs one
+// evaluation of every classical technique in use and of every sampled conditional technique.
+template <Technique C, MarginalTechnique M>
+  requires std::same_as<typename C::Sample, typename M::Sample>
+std::optional<MmisWeight> mmis_weight(std::span<const C> classical, std::span<const int> classical_counts,
+                                      std::span<const M> marginal,
+                                      const MmisDraw<typename M::Sample, typename M::Aux>& d, size_t s) {
+  if (s >= d.xs.size() || !d.xs[s]) return std::nullopt;
+  const auto den = mmis_detail::eq6_denominator(classical, classical_counts, marginal, d);
+  const size_t nc = d.classical_samples();
+  if (s >= nc) return den.of_pair(*d.xs[s], s, s - nc);
+  size_t first = 0;
+  for (size_t c = 0; c < classical.size(); ++c) {
+    const size_t n = static_cast<size_t>(classical_counts[c] > 0 ? classical_counts[c] : 0);
+    if (s < first + n) return den.of_classical(*d.xs[s], s, c);
+    first += n;
+  }
+  return std::nullopt;
+}
+
+// Calls visit(x, MmisWeight) for every drawn sample whose x did not fail, in the order of d.xs; each weight
+// is the one mmis_weight gives for that sample (the same code).
 template <Technique C, MarginalTechnique M, class Visit>
   requires std::same_as<typename C::Sample, typename M::Sample>
 void for_each_mmis_weight(std::span<const C> classical, std::span<const int> classical_counts,
                           std::span<const M> marginal, const MmisDraw<typename M::Sample, typename M::Aux>& d,
                           Visit&& visit) {
-  using X = typename M::Sample;
-  const auto* const aux = d.aux.data();
-  const M* const mar = marginal.data();
-  const size_t np = d.aux.size();
-  // The Eq. 6 denominator at x: Σ_c n_c p_c(x) (the split classical sum), then Σ_(i,j) p_i(x | t_ij)
-  // in pair order. *own receives the term of classical technique own_c or of pair own_k (one of
-  // them out of range), which is one of the summands, so it is not evaluated twice.
-  const auto denominator = [&](const X& x, size_t own_c, size_t own_k, double* own) {
-    double den = 0.0;
-    for (size_t c = 0; c < classical.size(); ++c)
-      if (classical_counts[c] > 0) {
-        const double term = classical_counts[c] * static_cast<double>(classical[c].pdf(x));
-        if (c == own_c) *own = term;
-        den += term;
-      }
-    for (size_t k = 0; k < np; ++k) {
-      const double term = static_cast<double>(mar[aux[k].technique].pdf(x, aux[k].t));
-      if (k == own_k) *own = term;
-      den += term;
-    }
-    return den;
-  };
+  const auto den = mmis_detail::eq6_denominator(classical, classical_counts, marginal, d);
   size_t s = 0;
   for (size_t c = 0; c < classical.size(); ++c)
-    for (int j = 0; j < classical_counts[c]; ++j, ++s) {
-      const auto& x = d.xs[s];
-      if (!x) continue;
-      MmisWeight w;
-      w.sample = s;
-      w.technique = c;
-      w.classical = true;
-      w.denominator = denominator(*x, c, np, &w.own_pdf);  // West et al. 2022, Eq. 6 denominator
-      w.weight = safe_ratio(w.own_pdf, w.denominator);
-      visit(*x, w);
-    }
-  for (size_t k = 0; k < np; ++k, ++s) {
-    const auto& x = d.xs[s];
-    if (!x) continue;
-    MmisWeight w;
-    w.sample = s;
-    w.technique = aux[k].technique;
-    w.denominator = denominator(*x, classical.size(), k, &w.own_pdf);  // West et al. 2022, Eq. 6 denominator
-    w.weight = safe_ratio(w.own_pdf, w.denominator);
-    visit(*x, w);
-  }
+    for (int j = 0; j < classical_counts[c]; ++j, ++s)
+      if (const auto& x = d.xs[s]) visit(*x, den.of_classical(*x, s, c));
+  for (size_t k = 0; k < den.np; ++k, ++s)
+    if (const auto& x = d.xs[s]) visit(*x, den.of_pair(*x, s, k));
 }
 
 // Every drawn sample (failed ones left out) with its MMIS weight.

@@ -140,6 +140,7 @@ std::optional<ForwardPath> trace_forward(const World& world, const Vec2& pixel, 
     path.wi.push_back(bs->wi);
     path.flags.push_back(bs->flags);
     path.pdf.push_back(bs->pdf);
+    path.weight.push_back(bs->weight);
     ray = spawn_ray(path.vertices.back(), bs->wi);
   }
   return path;

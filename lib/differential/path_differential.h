@@ -72,6 +72,7 @@ struct ForwardPath {
   std::vector<Vec3> wi;          // wi_j, j = 1..k-1 (index j-1)
   std::vector<uint32_t> flags;   // BSDF sample flags at x_j, j = 1..k-1
   std::vector<double> pdf;       // solid-angle pdf (delta: discrete lobe probability)
+  std::vector<Rgb> weight;       // the sample's f |cos wi| / pdf at x_j (the path tracer's throughput factor)
 };
 
 // The next vertex of a path: the hit of `ray` (spawned from `origin`, with the spawn offset when

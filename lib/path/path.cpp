@@ -17,12 +17,6 @@ double remap0(double p) { return p != 0.0 ? p : 1.0; }
 
 }  // namespace
 
-double to_area(double pdf_w, const PathVertex& from, const PathVertex& to) {
-  if (to.infinite) return pdf_w;                               // solid angle is the measure of a direction
-  if (to.is_light_kind() && to.delta) return 0.0;              // a point cannot be hit by chance
-  return solid_angle_to_area(pdf_w, from.hit.p, to.hit.p, to.geometric_normal());
-}
-
 double pdf_light_next(const PathVertex& x0, const PathVertex& x1) {
   if (!x0.light) return 0.0;
   double pos = 0, dir = 0;
@@ -47,22 +41,6 @@ bool PathVertex::connectible() const {
       return bsdf != nullptr && !delta;
   }
   return false;
-}
-
-Vec3 PathVertex::shading_normal() const {
-  if (infinite) return Vec3(0.0);
-  return hit.n;
-}
-
-Vec3 PathVertex::geometric_normal() const {
-  if (infinite) return Vec3(0.0);
-  return hit.ng;
-}
-
-Vec3 direction(const PathVertex& a, const PathVertex& b) {
-  if (b.infinite) return b.w_inf;
-  if (a.infinite) return -a.w_inf;
-  return glm::normalize(b.hit.p - a.hit.p);
 }
 
 double pdf_next(const PathContext& ctx, const PathVertex* prev, const PathVertex& cur, const PathVertex& next,

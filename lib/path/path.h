@@ -40,6 +40,7 @@
 #include "lib/geometry/hit.h"
 #include "lib/material/bsdf.h"
 #include "lib/path/light_sampler.h"
+#include "lib/path/measure.h"
 #include "lib/scene/world.h"
 
 namespace tb {
@@ -66,12 +67,17 @@ struct PathVertex {
   // Can this vertex be joined to another by a deterministic connection (not a Dirac scatterer)?
   bool connectible() const;
   // A normal for cosines (zero: no cosine): shading normal on surfaces and area lights.
-  Vec3 shading_normal() const;
-  Vec3 geometric_normal() const;
+  Vec3 shading_normal() const { return infinite ? Vec3(0.0) : hit.n; }
+  Vec3 geometric_normal() const { return infinite ? Vec3(0.0) : hit.ng; }
 };
 
-// Unit direction from vertex a towards vertex b (handles infinite vertices).
-Vec3 direction(const PathVertex& a, const PathVertex& b);
+// Unit direction from vertex a towards vertex b (handles infinite vertices). Inline, as to_area:
+// both run for every connection and every MIS ratio of BDPT and MMLT.
+inline Vec3 direction(const PathVertex& a, const PathVertex& b) {
+  if (b.infinite) return b.w_inf;
+  if (a.infinite) return -a.w_inf;
+  return glm::normalize(b.hit.p - a.hit.p);
+}
 
 // Environment for path evaluation: the world and the light-selection distribution.
 struct PathContext {
@@ -89,7 +95,11 @@ double pdf_next(const PathContext& ctx, const PathVertex* prev, const PathVertex
                 TransportMode mode);
 // Area density at `to` of a direction density pdf_w (solid angle) at `from`: pdf_w itself when
 // `to` is a direction (infinite light), 0 when `to` is a point light.
-double to_area(double pdf_w, const PathVertex& from, const PathVertex& to);
+inline double to_area(double pdf_w, const PathVertex& from, const PathVertex& to) {
+  if (to.infinite) return pdf_w;                   // solid angle is the measure of a direction
+  if (to.is_light_kind() && to.delta) return 0.0;  // a point cannot be hit by chance
+  return solid_angle_to_area(pdf_w, from.hit.p, to.hit.p, to.geometric_normal());
+}
 // Density of x_1 when emitted from x_0 (a light vertex or an emitting surface): the emission
 // direction density in area measure, or the emission disk's density for infinite lights.
 double pdf_light_next(const PathVertex& x0, const PathVertex& x1);

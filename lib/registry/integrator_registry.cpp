@@ -7,6 +7,7 @@
 #include "lib/integrator/bdpt.h"
 #include "lib/integrator/light_tracer.h"
 #include "lib/integrator/path_tracer.h"
+#include "lib/integrator/photon_map.h"
 #include "lib/mcmc/path_space/hslt_mutation.h"
 #include "lib/mcmc/path_space/mlt.h"
 #include "lib/mcmc/path_space/ramlt.h"
@@ -28,6 +29,12 @@ std::vector<IntegratorParameter> pss_parameters() {
           {"chains", "chains per pass (default 64)"},
           {"large_step", "large-step probability (default 0.3)"},
           {"sigma", "small-step standard deviation (default 0.01)"}};
+}
+
+std::vector<IntegratorParameter> photon_map_parameters(bool progressive) {
+  std::vector<IntegratorParameter> out;
+  for (const auto& [name, description] : photon_map_parameter_list(progressive)) out.push_back({name, description});
+  return out;
 }
 
 }  // namespace
@@ -87,6 +94,10 @@ const std::vector<IntegratorInfo>& integrators() {
          [](const World& w, const RenderSettings& s, Film& f) { return render_msmlt_mmlt(w, s, f); }},
         {"pssmlt-pt-rescaled", "PSSMLT over the path tracer, small step sigma rescaled by the path's luminance (Szirmay-Kalos & Szecsi 2017)",
          [](const World& w, const RenderSettings& s, Film& f) { return render_pssmlt_pt_rescaled(w, s, f); }, pss_parameters()},
+        {"pm", "photon mapping: density estimation with a fixed-radius constant kernel at the first non-delta camera vertex",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_pm(w, s, f); }, photon_map_parameters(false)},
+        {"sppm", "stochastic progressive photon mapping (Hachisuka & Jensen 2009): per-pixel radius reduction, one pass = one run",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_sppm(w, s, f); }, photon_map_parameters(true)},
         {"pt", "path tracing with next-event estimation, MIS (power heuristic) and Russian roulette",
          [](const World& w, const RenderSettings& s, Film& f) { return render_pt(w, s, f); }},
     };

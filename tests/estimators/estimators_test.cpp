@@ -202,7 +202,8 @@ TEST(Mmis, PerSampleWeightsGiveTheScalarEstimate) {
       }
       EXPECT_EQ(sum, e.value);
       expect_close(via_weight, e.value);
-      expect_close(e.value, eq6_reference(f, cls, nc, mar, d));
+      // Eq. 6 written out sums every denominator in the same order: the same round-off, bit for bit.
+      EXPECT_EQ(e.value, eq6_reference(f, cls, nc, mar, d));
       // Every sample that did not fail appears once, with its own technique's density.
       size_t drawn = 0;
       for (const auto& x : d.xs) drawn += x.has_value();
@@ -212,20 +213,72 @@ TEST(Mmis, PerSampleWeightsGiveTheScalarEstimate) {
         EXPECT_EQ(*d.xs[s.w.sample], s.x);
         if (s.w.classical) {
           ASSERT_LT(s.w.sample, d.classical_samples());
+          EXPECT_EQ(mmis_own_aux(d, s.w), nullptr);
           EXPECT_EQ(s.w.own_pdf, nc[s.w.technique] * cls[s.w.technique].pdf(s.x));
         } else {
           const auto& a = d.aux[s.w.sample - d.classical_samples()];
           EXPECT_EQ(a.technique, s.w.technique);
+          EXPECT_EQ(mmis_own_aux(d, s.w), &a.t);
           EXPECT_EQ(s.w.own_pdf, mar[a.technique].pdf(s.x, a.t));
         }
         EXPECT_GE(s.w.weight, 0.0);
         EXPECT_LE(s.w.weight, 1.0 + kTol);
         expect_close(s.w.weight * s.w.denominator, s.w.own_pdf);
       }
+      // The one-sample form gives the same weight, technique and densities, bit for bit.
+      for (const auto& sw : ws) {
+        const auto one = mmis_weight(cs, std::span<const int>(nc), ms, d, sw.w.sample);
+        ASSERT_TRUE(one);
+        EXPECT_EQ(one->technique, sw.w.technique);
+        EXPECT_EQ(one->classical, sw.w.classical);
+        EXPECT_EQ(one->own_pdf, sw.w.own_pdf);
+        EXPECT_EQ(one->denominator, sw.w.denominator);
+        EXPECT_EQ(one->weight, sw.w.weight);
+      }
+      for (size_t s = 0; s < d.xs.size(); ++s)
+        EXPECT_EQ(mmis_weight(cs, std::span<const int>(nc), ms, d, s).has_value(), d.xs[s].has_value());
+      EXPECT_FALSE(mmis_weight(cs, std::span<const int>(nc), ms, d, d.xs.size()));
       EXPECT_EQ(e.pdf_evals, static_cast<int64_t>(drawn) * mmis_pdf_evals_per_sample(std::span<const int>(nc), d));
     }
   }
   EXPECT_GT(failed, 0);  // the failing draws were exercised
+}
+
+// The two uses of one per-sample weight function (for_each_mmis_weight): the analytic checks' scalar
+// estimate (evaluate_mmis) and a renderer that splats an RGB contribution weight · f_rgb / own_pdf per
+// sample. On fixed seeds the scalar estimate equals Eq. 6 written out directly (eq6_reference, the form
+// evaluate_mmis had before it was built on the weights) bit for bit, and the splat to 1e-12.
+TEST(Mmis, OneWeightFunctionServesTheScalarEstimateAndAnRgbSplat) {
+  const auto& f = integrand_1d("fig1_two_features");
+  const auto cn = centre_technique(0.1), wd = width_technique();
+  const std::vector<Classical1D> cls{Classical1D(UniformTechnique1D{})};
+  const std::vector<ConditionalNormal1D> mar{cn, wd};
+  const auto cs = std::span<const Classical1D>(cls);
+  const auto ms = std::span<const ConditionalNormal1D>(mar);
+  for (int n : {1, 2, 4}) {
+    const std::vector<int> nc{n}, nm{n, n};
+    for (uint64_t rep = 0; rep < 20; ++rep) {
+      Rng r = Rng::for_sample(29, n, rep);
+      RngUniforms u(r);
+      const auto d = draw_mmis(cs, std::span<const int>(nc), ms, std::span<const int>(nm), u);
+      // Analytic use: the scalar Eq. 6 estimate.
+      const Estimate e = evaluate_mmis(f, cs, std::span<const int>(nc), ms, d);
+      // Renderer use: an RGB throughput f_rgb(x) / own_pdf splatted with the sample's MMIS weight.
+      std::array<double, 3> rgb{0.0, 0.0, 0.0};
+      double scalar = 0.0;
+      for_each_mmis_weight(cs, std::span<const int>(nc), ms, d, [&](double x, const MmisWeight& w) {
+        const std::array<double, 3> f_rgb{f(x), 0.5 * f(x), 2.0 * f(x)};
+        for (size_t c = 0; c < 3; ++c) rgb[c] += w.own_pdf > 0.0 ? w.weight * f_rgb[c] / w.own_pdf : 0.0;
+        scalar += w.contribution(f(x));
+      });
+      const double reference = eq6_reference(f, cls, nc, mar, d);
+      EXPECT_EQ(scalar, e.value);
+      EXPECT_EQ(e.value, reference);  // the same summation order as Eq. 6 written out: bit for bit
+      expect_close(rgb[0], reference);
+      expect_close(rgb[1], 0.5 * reference);
+      expect_close(rgb[2], 2.0 * reference);
+    }
+  }
 }
 
 TEST(Mmis, BudgetEstimateReusesOneDrawAndEqualsRealisationsAveraged) {

@@ -1,7 +1,7 @@
 // A new mutation is one class and one registration: registered at run time here, it is picked up
 // by the checks that loop over the registries (validate/mcmc/registered_mutations.h, the functions
-// behind mcmc.pss.cornell.registered_mutations.pairwise and
-// mlt.path_space.registered_mutations.pairwise), and by the renderers' drivers.
+// behind mcmc.pss.cornell.registered_mutations.pairwise, mlt.path_space.registered_mutations.pairwise
+// and mlt.path_space.registered_mutations.flux_bins), and by the renderers' drivers.
 #include <memory>
 #include <string>
 
@@ -78,6 +78,7 @@ TEST(MutationRegistry, NewPathMutationIsPickedUpByTheChecksAndTheDriver) {
                                 "test small lens", w, LensPerturbation(ctx, 0.1, 2.0));
                           }});
   const CheckResult r = path_registered_mutations_pairwise(quick(), "test.path.registered");
+  const CheckResult flux = path_registered_mutations_flux_bins(quick(), "test.path.registered.flux");
   // The driver runs it too: its statistics name it and it is proposed.
   const auto world = load_scene_at_resolution("cornell-box.json", 8, 8);
   RenderSettings st;
@@ -90,6 +91,9 @@ TEST(MutationRegistry, NewPathMutationIsPickedUpByTheChecksAndTheDriver) {
   ASSERT_TRUE(r.details["mutations"].contains("test small lens")) << r.details.dump(1);
   EXPECT_TRUE(r.details["mutations"]["test small lens"]["passed"].get<bool>()) << r.message;
   EXPECT_TRUE(r.passed) << r.details.dump(1);
+  ASSERT_TRUE(flux.details["mutations"].contains("test small lens")) << flux.details.dump(1);
+  EXPECT_GT(flux.details["mutations"]["test small lens"]["pairs_tested"].get<int64_t>(), 0) << flux.message;
+  EXPECT_TRUE(flux.passed) << flux.message;
   bool seen = false;
   for (const auto& m : stats.mutations)
     if (m.name == "test small lens") {

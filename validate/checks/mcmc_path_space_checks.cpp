@@ -479,39 +479,11 @@ CheckResult flux_bins_check(LensFault lens_fault, bool lens_only, const CheckCon
       run_flux_bins(mcmc::MetropolisHastings(PathTarget{&sc.ctx},
                                              lens_only ? PathMixture({lens}) : PathMixture(scene_mutations(sc, bidir_fault))),
                     sc, o);
-  double p_min = 1.0;
-  int64_t tested = 0;
-  std::pair<int, int> worst{-1, -1};
-  int64_t worst_ab = 0, worst_ba = 0;
-  for (const auto& [ab, nab] : f.n) {
-    if (ab.first > ab.second) continue;  // each unordered pair once
-    const auto it = f.n.find({ab.second, ab.first});
-    const int64_t nba = it == f.n.end() ? 0 : it->second;
-    if (nab + nba < kMinCrossings) continue;
-    ++tested;
-    const double p = stats::binomial_test(nab, nab + nba, 0.5).p_value;
-    if (p < p_min) {
-      p_min = p;
-      worst = ab;
-      worst_ab = nab;
-      worst_ba = nba;
-    }
-  }
-  // Pairs (B, A) with no A -> B transition and B > A are counted above only through (A, B); a pair
-  // seen in one direction only with B < A is tested here.
-  for (const auto& [ab, nab] : f.n) {
-    if (ab.first < ab.second || f.n.count({ab.second, ab.first})) continue;
-    if (nab < kMinCrossings) continue;
-    ++tested;
-    const double p = stats::binomial_test(0, nab, 0.5).p_value;
-    if (p < p_min) {
-      p_min = p;
-      worst = {ab.second, ab.first};
-      worst_ab = 0;
-      worst_ba = nab;
-    }
-  }
-  const double p_family = tested > 0 ? stats::sidak_adjust(p_min, tested) : 1.0;
+  const FluxBinTest t = flux_bin_test(f, kMinCrossings);
+  const int64_t tested = t.tested;
+  const double p_min = t.p_min, p_family = t.p_family;
+  const std::pair<int, int> worst = t.worst;
+  const int64_t worst_ab = t.worst_ab, worst_ba = t.worst_ba;
   CheckResult res;
   res.passed = tested > 0 && !(p_family < kAlpha);
   res.statistic_name = "Šidák-adjusted min p over bin pairs";
@@ -818,9 +790,30 @@ const bool registered = [] {
       "T stated as a constant",
       CheckKind::kDeterministic, [](const CheckContext& cx, const std::string& n) {
         return negate(path_registered_mutations_pairwise(
-            cx, n, [](std::shared_ptr<const PathMutation> m) -> std::shared_ptr<const PathMutation> {
+            cx, n, [](std::shared_ptr<const PathMutation> m, const PathContext&) -> std::shared_ptr<const PathMutation> {
               return m->name() == "lens" ? std::make_shared<const LensWithoutDensityRatio>(m) : m;
             }));
+      });
+  add(p + "registered_mutations.flux_bins",
+      "Every registered path mutation alone: flux symmetry by bins (4x4-pixel block x path length), binomial test "
+      "per bin pair, Šidák over pairs and mutations",
+      CheckKind::kStatistical,
+      [](const CheckContext& cx, const std::string& n) { return path_registered_mutations_flux_bins(cx, n); });
+  add(p + "negative_control.registered_mutations_bidir_missing_geometry.flux_bins",
+      "Negative control: the registered-mutations flux check must reject the registry with the bidirectional "
+      "mutation's density stated without its geometry terms",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) {
+        CheckResult r = path_registered_mutations_flux_bins(
+            cx, n,
+            [](std::shared_ptr<const PathMutation> m, const PathContext& pc) -> std::shared_ptr<const PathMutation> {
+              if (m->name() != "bidirectional") return m;
+              return std::make_shared<const BidirWithoutGeometryTerm>(pc, kRegisteredCheckMaxDepth + 1);
+            });
+        // Caught only by a rejection (a mutation left untested also fails the inner check).
+        const bool rejected = r.statistic < r.alpha;
+        r = negate(r);
+        r.passed = rejected;
+        return r;
       });
   add(p + "mixture.pairwise",
       "The MLT kernel (bidirectional + lens + caustic, length-dependent selection): pi c T a symmetric to 1e-9",

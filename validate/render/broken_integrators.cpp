@@ -3,6 +3,7 @@
 #include "lib/integrator/bdpt_impl.h"
 #include "lib/integrator/light_tracer_impl.h"
 #include "lib/integrator/path_tracer_impl.h"
+#include "lib/integrator/photon_map_impl.h"
 #include "lib/registry/integrator_registry.h"
 
 namespace tb {
@@ -92,6 +93,7 @@ RenderFunction find_render_function(const std::string& name) {
   if (const IntegratorInfo* info = find_integrator(name)) return info->render;
   const size_t tilde = name.find('~');
   if (tilde == std::string::npos) return {};
+  if (auto pm = broken_photon_map(name.substr(0, tilde), name.substr(tilde + 1))) return pm;
   for (const EstimatorFault f : kAllFaults)
     if (name.substr(tilde + 1) == fault_name(f)) return broken_integrator(name.substr(0, tilde), f);
   return {};
@@ -109,6 +111,30 @@ Connection connect_bdpt_broken(EstimatorFault fault, const PathContext& ctx, std
   return with_terms(fault, [&]<class Terms>() {
     return detail::connect_bdpt_with<Terms>(ctx, light, camera, s, t, u);
   });
+}
+
+}  // namespace tb
+
+namespace tb {
+namespace {
+
+struct KernelPerRadiusTerms : PhotonTerms {
+  static double kernel_area(double r) { return r; }
+};
+
+}  // namespace
+
+RenderFunction broken_photon_map(const std::string& integrator, const std::string& fault) {
+  if (fault != kPhotonKernelPerRadius) return {};
+  if (integrator == "pm")
+    return [](const World& w, const RenderSettings& st, Film& film) {
+      return detail::render_pm_with<KernelPerRadiusTerms>(w, st, film);
+    };
+  if (integrator == "sppm")
+    return [](const World& w, const RenderSettings& st, Film& film) {
+      return detail::render_sppm_with<KernelPerRadiusTerms>(w, st, film);
+    };
+  return {};
 }
 
 }  // namespace tb

@@ -51,4 +51,11 @@ Connection connect_bdpt_broken(EstimatorFault fault, const PathContext& ctx, std
 // The reciprocal of importance_shading_correction (0 where that is 0): the broken shading factor.
 double inverted_importance_shading_correction(const SurfacePoint& hit, const Vec3& wo, const Vec3& wi);
 
+// Photon mapping ("pm", "sppm") whose density-estimation kernel is not normalised by its area:
+// the photons' sum divided by N r instead of N pi r^2 (lib/integrator/photon_map_impl.h's
+// PhotonTerms with kernel_area(r) = r). Goes by "pm~kernel_per_radius" / "sppm~kernel_per_radius"
+// in find_render_function; empty for another integrator or fault name.
+RenderFunction broken_photon_map(const std::string& integrator, const std::string& fault);
+inline constexpr const char* kPhotonKernelPerRadius = "kernel_per_radius";
+
 }  // namespace tb

@@ -19,11 +19,6 @@ double wrapped_normal_pdf(double d, double sigma) {
   return norm * sum;
 }
 
-double wrap01(double x) {
-  const double r = x - std::floor(x);
-  return r < 1.0 ? r : 0.0;  // x = -1e-17 rounds to r = 1: the same point of the circle as 0
-}
-
 PssState::PssState(Rng rng, double sigma) : rng_(rng), sigma_(sigma) {}
 
 PssState PssState::at(const std::vector<double>& u, Rng rng, double sigma) {
@@ -58,9 +53,25 @@ void PssState::reject() {
 }
 
 // A standard normal from two uniforms (Box & Muller 1958); 1 - u keeps the log argument in (0, 1].
+// N(0, 1) by the polar method (Marsaglia & Bray 1964): (u, v) uniform in the unit disk by
+// rejection from the square, then u f and v f with f = sqrt(-2 ln s / s), s = u^2 + v^2, are two
+// independent standard normals; the second is kept for the next call. One log and no cosine per
+// two normals.
 double PssState::gaussian() {
-  const double u1 = 1.0 - rng_.uniform(), u2 = rng_.uniform();
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
+  if (has_spare_) {
+    has_spare_ = false;
+    return spare_;
+  }
+  double u, v, s;
+  do {
+    u = 2.0 * rng_.uniform() - 1.0;
+    v = 2.0 * rng_.uniform() - 1.0;
+    s = u * u + v * v;
+  } while (s >= 1.0 || s == 0.0);
+  const double f = std::sqrt(-2.0 * std::log(s) / s);
+  spare_ = v * f;
+  has_spare_ = true;
+  return u * f;
 }
 
 void PssState::ensure_ready(size_t i) {

@@ -39,6 +39,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -60,8 +61,15 @@ class StreamUniforms : public Uniforms {
 // Wrapped Gaussian density on the circle [0,1): g_sigma(d) = sum_m phi_sigma(d + m), summed over
 // the images |m| <= ceil(12 sigma) + 1 (the rest is below 1e-31 of the peak); g(d) = g(-d) bitwise.
 double wrapped_normal_pdf(double d, double sigma);
-// x + d reduced to [0, 1) (d any real).
-double wrap01(double x);
+// x reduced to [0, 1): x - floor(x), with 1 (from x = -1e-17) mapped to 0, the same point of the
+// circle. Inline, and without the floor call for x in [-1, 2), where every perturbed coordinate of
+// a small step lands (|sigma z| < 1); the results are bitwise those of x - floor(x) there.
+inline double wrap01(double x) {
+  if (x >= 0.0 && x < 1.0) return x;
+  if (x >= 1.0 && x < 2.0) return x - 1.0;
+  const double r = (x >= -1.0 && x < 0.0) ? x + 1.0 : x - std::floor(x);
+  return r < 1.0 ? r : 0.0;
+}
 
 // The lazily updated chain state.
 class PssState final : public StreamUniforms {
@@ -99,7 +107,10 @@ class PssState final : public StreamUniforms {
 
   // Replaces the generator of fresh numbers (a chain started from a bootstrap sample regenerates
   // that sample with the bootstrap's stream, then mutates with its own).
-  void set_rng(const Rng& rng) { rng_ = rng; }
+  void set_rng(const Rng& rng) {
+    rng_ = rng;
+    has_spare_ = false;
+  }
 
   // Introspection (tests, checks).
   int64_t iteration() const { return iteration_; }
@@ -123,6 +134,8 @@ class PssState final : public StreamUniforms {
   double gaussian();
 
   Rng rng_;
+  double spare_ = 0.0;  // the second normal of the last polar-method pair (gaussian)
+  bool has_spare_ = false;
   double sigma_;
   std::vector<Coordinate> x_;
   int64_t iteration_ = 0;

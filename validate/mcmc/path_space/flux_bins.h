@@ -22,6 +22,7 @@
 #include "lib/core/parallel.h"
 #include "lib/core/rng.h"
 #include "lib/mcmc/path_space/start_paths.h"
+#include "validate/stats/tests.h"
 
 namespace tb::path_space {
 
@@ -84,6 +85,39 @@ FluxBinCounts flux_bins(const K& kernel, const PathContext& ctx, const FluxBinOp
   }
   out.transitions = o.chains * o.steps;
   return out;
+}
+
+// The binomial test of flux symmetry over the bin pairs of c: N_AB ~ Binomial(N_AB + N_BA, 1/2) for
+// each unordered pair with at least min_crossings crossings (a pair seen in one direction only
+// included), Šidák over the pairs tested.
+struct FluxBinTest {
+  int64_t tested = 0;     // bin pairs tested
+  double p_min = 1.0;     // smallest binomial p
+  double p_family = 1.0;  // Šidák-adjusted p_min (1 when nothing is tested)
+  std::pair<int, int> worst{-1, -1};
+  int64_t worst_ab = 0, worst_ba = 0;
+};
+
+inline FluxBinTest flux_bin_test(const FluxBinCounts& c, int64_t min_crossings) {
+  FluxBinTest t;
+  const auto consider = [&](std::pair<int, int> ab, int64_t nab, int64_t nba) {
+    if (nab + nba < min_crossings) return;
+    ++t.tested;
+    const double p = stats::binomial_test(nab, nab + nba, 0.5).p_value;
+    if (p < t.p_min) {
+      t.p_min = p;
+      t.worst = ab;
+      t.worst_ab = nab;
+      t.worst_ba = nba;
+    }
+  };
+  for (const auto& [ab, nab] : c.n) {
+    const auto it = c.n.find({ab.second, ab.first});
+    if (ab.first < ab.second) consider(ab, nab, it == c.n.end() ? 0 : it->second);  // each pair once
+    else if (it == c.n.end()) consider({ab.second, ab.first}, 0, nab);  // seen only as B -> A with B > A
+  }
+  t.p_family = t.tested > 0 ? stats::sidak_adjust(t.p_min, t.tested) : 1.0;
+  return t;
 }
 
 }  // namespace tb::path_space
