@@ -8,6 +8,10 @@
 // k = 8 .. 64 (smaller sizes are dominated by fixed overheads); expected about 1 (block LU) and
 // about 3 (dense LU); and the slope between consecutive sizes (the dense LU of a 126 x 126
 // matrix is only reaching its cubic regime at the top of the range).
+// BM_HsltStep/k: one Metropolis step of the half-vector mutation (lib/mcmc/path_space/hslt_mutation.h)
+// on the 16 x 16 glossy scene, from 64 fixed BDPT paths of k segments it applies to: propose (forward
+// and reverse walk) and, for a proposal, T(x -> y) and T(y -> x) (two walks each), as the chain's
+// acceptance evaluates them; not in the slope fit.
 // Run: ./build/bench/hslt_bench
 #include <cmath>
 #include <cstdio>
@@ -19,6 +23,10 @@
 
 #include "lib/core/rng.h"
 #include "lib/differential/hslt_block_lu.h"
+#include "lib/mcmc/path_space/hslt_mutation.h"
+#include "lib/mcmc/path_space/start_paths.h"
+#include "lib/path/light_sampler.h"
+#include "validate/render/render_compare.h"
 
 namespace tb {
 namespace {
@@ -65,8 +73,52 @@ void BM_HsltDenseLu(benchmark::State& state) {
   }
 }
 
+struct GlossyPaths {
+  std::unique_ptr<World> world = load_scene_at_resolution("glossy.json", 16, 16);
+  LightSampler lights{*world};
+  PathContext ctx{world.get(), &lights};
+  std::map<int, std::vector<path_space::MltPath>> by_length;
+  const std::vector<path_space::MltPath>& paths(int k) {
+    auto& v = by_length[k];
+    if (!v.empty()) return v;
+    const path_space::HsltMutation m(ctx);
+    Rng rng = Rng::for_sample(1, 3, static_cast<uint64_t>(k));
+    RngUniforms u(rng);
+    for (int a = 0; a < 400000 && v.size() < 64; ++a)
+      if (auto p = path_space::sample_bdpt_path(ctx, u, k - 1, k))
+        if (p->segments() == k && m.applicable(*p)) v.push_back(*p);
+    return v;
+  }
+};
+
+void BM_HsltStep(benchmark::State& state) {
+  static GlossyPaths g;
+  const int k = static_cast<int>(state.range(0));
+  const auto& paths = g.paths(k);
+  if (paths.empty()) {
+    state.SkipWithError("no paths");
+    return;
+  }
+  const path_space::HsltMutation m(g.ctx);
+  Rng rng = Rng::for_sample(2, 3, static_cast<uint64_t>(k));
+  RngUniforms u(rng);
+  size_t i = 0;
+  int64_t proposals = 0;
+  for (auto _ : state) {
+    const auto& x = paths[i++ % paths.size()];
+    const auto y = m.propose(x, u);
+    if (y) {
+      ++proposals;
+      benchmark::DoNotOptimize(m.density(x, *y));
+      benchmark::DoNotOptimize(m.density(*y, x));
+    }
+  }
+  state.counters["generated"] = benchmark::Counter(static_cast<double>(proposals) / static_cast<double>(state.iterations()));
+}
+
 BENCHMARK(BM_HsltBlockLu)->RangeMultiplier(2)->Range(2, 64);
 BENCHMARK(BM_HsltDenseLu)->RangeMultiplier(2)->Range(2, 64);
+BENCHMARK(BM_HsltStep)->Arg(2)->Arg(3)->Arg(4)->Unit(benchmark::kMicrosecond);
 
 // Console output as usual, and the time per iteration of every run kept for the slope fit.
 class SlopeReporter : public benchmark::ConsoleReporter {
@@ -105,7 +157,7 @@ int main(int argc, char** argv) {
   benchmark::RunSpecifiedBenchmarks(&reporter);
   std::printf("\nlog-log slope of time against the number of blocks k - 1, over k = 8 .. 64:\n");
   for (const auto& [name, p] : reporter.points) {
-    if (p.size() < 3) continue;
+    if (p.size() < 3 || name.find("Lu") == std::string::npos) continue;
     std::printf("  %-16s slope %.2f  (k = 2 .. 64: %.2f); per doubling:", name.c_str(), tb::slope(p, 7),
                 tb::slope(p, 1));
     for (size_t i = 1; i < p.size(); ++i)

@@ -8,6 +8,7 @@
 #include "lib/integrator/light_tracer.h"
 #include "lib/integrator/path_tracer.h"
 #include "lib/integrator/photon_map.h"
+#include "lib/mcmc/path_space/hslt_mutation.h"
 #include "lib/mcmc/path_space/mlt.h"
 #include "lib/mcmc/path_space/ramlt.h"
 #include "lib/mcmc/pss/msmlt.h"
@@ -64,6 +65,7 @@ const std::vector<IntegratorInfo>& integrators() {
          [](const World& w, const RenderSettings& s, Film& f) { return render_bdpt(w, s, f); }},
         {"lt", "light tracing: emitter paths connected to the camera and splatted (importance transport)",
          [](const World& w, const RenderSettings& s, Film& f) { return render_lt(w, s, f); }},
+        {"hslt", "path-space MLT with the half-vector mutation (Kaplanyan et al. 2014) mixed with the bidirectional mutation (pinhole)", render_hslt, {{"gamma", "half-vector step scale of Sec. 6.1 (default 0.1)"}, {"stratify", "1: Sec. 6.2-6.3 step sizes (default), 0: BSDF steps only"}}},
         {"mlt", "Veach's path-space MLT: bidirectional mutation, lens and caustic perturbations through specular chains (pinhole)",
          [](const World& w, const RenderSettings& s, Film& f) { return render_mlt(w, s, f); }},
         {"ramlt-lens", "regional adaptive MLT (Otsu et al.): bidirectional mutation + regional adaptive lens "

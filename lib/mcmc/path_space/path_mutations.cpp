@@ -5,6 +5,7 @@
 
 #include "lib/mcmc/path_space/bidirectional_mutation.h"
 #include "lib/mcmc/path_space/caustic_perturbation.h"
+#include "lib/mcmc/path_space/hslt_mutation.h"
 #include "lib/mcmc/path_space/lens_perturbation.h"
 #include "lib/mcmc/path_space/multi_chain_perturbation.h"
 #include "lib/mcmc/path_space/ramlt_perturbations.h"
@@ -44,6 +45,10 @@ std::shared_ptr<const PathMutation> make_ramlt_multi(const PathContext& ctx, con
       RamltMultiChainPerturbation(ctx, RegionalScale::uniform(ScreenPartition::make(ctx, "grid", 20), kRegistryLambda)));
 }
 
+std::shared_ptr<const PathMutation> make_hslt(const PathContext& ctx, const PathMutationSettings&, double w) {
+  return std::make_shared<const PathProposalMutation<HsltMutation>>("hslt", w, HsltMutation(ctx), hslt_applies);
+}
+
 std::vector<PathMutationInfo>& table() {
   static std::vector<PathMutationInfo> t = {
       {"bidirectional", "delete a subpath, regenerate it from both ends (Veach 1997, Sec. 11.4.2)", 0.4, make_bidir},
@@ -56,6 +61,8 @@ std::vector<PathMutationInfo>& table() {
        "region (Otsu et al., Sec. 3, 5)", 0.5, make_ramlt_lens, false},
       {"ramlt-multichain", "regional adaptive multi-chain perturbation: truncated-normal directions, sigma of the "
        "screen region (Otsu et al., Sec. 3, 5)", 0.5, make_ramlt_multi, false},
+      {"hslt", "half-vector mutation: perturb every half vector, walk to the new constraints, reverse check "
+       "(Kaplanyan et al. 2014, Sec. 5, 6.1)", 0.5, make_hslt, false},
   };
   return t;
 }

@@ -1,0 +1,357 @@
+#include "lib/mcmc/path_space/hslt_mutation.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "lib/differential/hslt_block_lu.h"
+#include "lib/differential/hslt_constraints.h"
+#include "lib/camera/camera.h"
+#include "lib/material/bsdf.h"
+#include "lib/material/half_vector.h"
+#include "lib/path/dirac.h"
+#include "lib/mcmc/path_space/mlt.h"
+#include "lib/scene/world.h"
+
+namespace tb::path_space {
+
+namespace {
+
+constexpr auto kRelaxed = std::memory_order_relaxed;
+
+// Index of refraction of the medium on the side of `p` of the surface at v (outward normals:
+// the geometric normal points outside, Bsdf::eta is the inside index).
+double side_eta(const PathVertex& v, const Vec3& p) {
+  const double eta = v.bsdf->eta();
+  if (eta == 1.0) return 1.0;
+  return glm::dot(v.hit.ng, p - v.hit.p) > 0.0 ? 1.0 : eta;
+}
+
+}  // namespace
+
+HsltCountsSnapshot snapshot(const HsltCounters& c) {
+  HsltCountsSnapshot s;
+  s.proposals = c.proposals.load(kRelaxed);
+  s.not_applicable = c.not_applicable.load(kRelaxed);
+  for (int i = 0; i < kHsltWalkStatusCount; ++i) s.status[static_cast<size_t>(i)] = c.forward_status[static_cast<size_t>(i)].load(kRelaxed);
+  s.converged = s.status[static_cast<size_t>(HsltWalkStatus::kConverged)];
+  s.iterations_converged = c.iterations_converged.load(kRelaxed);
+  s.iterations_all = c.iterations_all.load(kRelaxed);
+  s.non_reversible = c.non_reversible.load(kRelaxed);
+  s.generated = c.generated.load(kRelaxed);
+  return s;
+}
+
+HsltMutation::HsltMutation(const PathContext& ctx, double gamma, std::shared_ptr<HsltCounters> counters, bool stratify,
+                           double image_fraction)
+    : ctx_(&ctx), gamma_(gamma), counters_(counters ? std::move(counters) : std::make_shared<HsltCounters>()),
+      stratify_(stratify), image_fraction_(image_fraction) {
+  options_.visibility = true;  // the proposal must be a path with f > 0: no shape between vertices
+  options_.side = HsltProjectionSide::kHeuristic;  // Sec. 5.1, Table 2
+}
+
+bool HsltMutation::applicable(const MltPath& x) const {
+  const int k = x.segments();
+  if (k < 2 || x.v[static_cast<size_t>(k)].kind != VertexKind::kCamera) return false;
+  const PathVertex& e = x.v[0];
+  if (e.infinite || e.light == nullptr) return false;
+  int non_diffuse = 0, non_dirac = 0;
+  for (int i = 1; i < k; ++i) {
+    const PathVertex& v = x.v[static_cast<size_t>(i)];
+    if (!v.is_surface() || v.bsdf == nullptr) return false;
+    const double a = v.bsdf->beckmann_roughness();
+    non_diffuse += std::isfinite(a) ? 1 : 0;
+    non_dirac += is_dirac_surface(v) ? 0 : 1;
+  }
+  return non_diffuse >= 1 && non_dirac >= 1;
+}
+
+bool hslt_applies(const HsltMutation& m, const MltPath& x) { return m.applicable(x); }
+
+std::optional<HsltPath> HsltMutation::hslt_path(const MltPath& x, const HsltPath* frames_of) const {
+  const int k = x.segments();
+  if (k < 2) return std::nullopt;
+  if (frames_of && frames_of->segments() != k) return std::nullopt;
+  HsltPath X;
+  X.vertices.reserve(static_cast<size_t>(k + 1));
+  const PathVertex& e = x.v[0];
+  X.vertices.push_back(e.delta ? make_point_vertex(e.hit.p) : make_hslt_vertex(e.hit));
+  for (int i = 1; i < k; ++i) {
+    const auto ui = static_cast<size_t>(i);
+    const PathVertex& v = x.v[ui];
+    if (!v.is_surface() || v.bsdf == nullptr) return std::nullopt;
+    HsltVertex h = make_hslt_vertex(v.hit, side_eta(v, x.v[ui - 1].hit.p), side_eta(v, x.v[ui + 1].hit.p));
+    if (frames_of) {
+      const HsltVertex& r = frames_of->vertices[ui];
+      if (r.shape_id != h.shape_id || r.prim_id != h.prim_id || r.eta_prev != h.eta_prev || r.eta_next != h.eta_next)
+        return std::nullopt;
+      h.frame_ref = r.frame_ref;
+    }
+    X.vertices.push_back(h);
+  }
+  X.vertices.push_back(make_point_vertex(x.v[static_cast<size_t>(k)].hit.p));
+  if (frames_of) X.vertices.front().frame_ref = frames_of->vertices.front().frame_ref;
+  return X;
+}
+
+std::vector<double> HsltMutation::sigmas(const MltPath& x) const {
+  std::vector<double> s;
+  for (int i = 1; i < x.segments(); ++i) {
+    const PathVertex& v = x.v[static_cast<size_t>(i)];
+    if (is_dirac_surface(v)) {
+      s.push_back(0.0);
+      continue;
+    }
+    double a = v.bsdf->beckmann_roughness();
+    if (!std::isfinite(a)) a = kDiffuseAlpha;
+    // Kaplanyan 2014, Sec. 6.1: expected step gamma alpha / sqrt(pi); a 2D Gaussian of standard
+    // deviation sigma per axis has expected step length sigma sqrt(pi / 2).
+    s.push_back(gamma_ * a * std::sqrt(2.0) / kPi);
+  }
+  return s;
+}
+
+std::vector<Eigen::Matrix2d> HsltMutation::step_factors(const MltPath& x, const HsltPath& X) const {
+  const std::vector<double> s = sigmas(x);
+  std::vector<Eigen::Matrix2d> L(s.size());
+  for (size_t r = 0; r < s.size(); ++r) L[r] = s[r] * Eigen::Matrix2d::Identity();
+  if (!stratify_) return L;
+  // Sec. 6.2: the camera ray differentials at x_{k-1}, on its tangent plane, in its (u, v).
+  const int k = X.segments();
+  const HsltVertex& v = X.vertices[static_cast<size_t>(k - 1)];
+  const Camera& cam = ctx_->world->camera();
+  const std::optional<Vec2> raster = path_raster(*ctx_, x);
+  if (!raster) return L;
+  const CameraRay cr = cam.generate_ray(*raster, Vec2(0.5));
+  if (!cr.ray.has_differentials) return L;
+  const auto on_plane = [&](const Vec3& o, const Vec3& d) -> std::optional<Vec3> {
+    const double den = glm::dot(d, v.ng);
+    if (!(std::abs(den) > 1e-12)) return std::nullopt;
+    return o + d * (glm::dot(v.p - o, v.ng) / den);
+  };
+  const auto p0 = on_plane(cr.ray.o, cr.ray.d), pu = on_plane(cr.ray.rx_o, cr.ray.rx_d),
+             pv = on_plane(cr.ray.ry_o, cr.ray.ry_d);
+  if (!p0 || !pu || !pv) return L;
+  Eigen::Matrix<double, 3, 2> T;
+  T << v.dpdu.x, v.dpdv.x, v.dpdu.y, v.dpdv.y, v.dpdu.z, v.dpdv.z;
+  const Eigen::Matrix2d G = T.transpose() * T;
+  if (!(std::abs(G.determinant()) > 0)) return L;
+  const double scale = image_fraction_ * std::max(cam.width(), cam.height());
+  const auto to_uv = [&](const Vec3& d) {
+    return Eigen::Vector2d(G.inverse() * (T.transpose() * Eigen::Vector3d(d.x, d.y, d.z)) * scale);
+  };
+  const Eigen::Vector2d du = to_uv(*pu - *p0), dv = to_uv(*pv - *p0);
+  // Eq. 9: D_i = (J^{-1})_{k-1, i}, dx_{k-1} = D_i dh_i (Kaplanyan 2014, Sec. 6.2, Sec. 7).
+  std::vector<Eigen::Matrix2d> D;
+  if (!hslt_inverse_last_block_row(hslt_constraint_blocks(X), &D)) return L;
+  double sum = 0.0;
+  for (double si : s) sum += si;
+  if (!(sum > 0)) return L;
+  for (size_t r = 0; r < s.size(); ++r) {
+    if (!(s[r] > 0)) continue;
+    if (!(std::abs(D[r].determinant()) > 1e-300)) continue;
+    const Eigen::Matrix2d Dinv = D[r].inverse();
+    const Eigen::Vector2d hu = Dinv * du, hv = Dinv * dv;
+    const double l1 = hu.norm();
+    if (!(l1 > 0) || !std::isfinite(l1) || !hv.allFinite()) continue;
+    const Eigen::Vector2d e1 = hu / l1, e2(-e1(1), e1(0));
+    const double l2 = std::abs(hv.dot(e2));
+    const double w = s[r] / sum;  // Sec. 6.3 bandwidth weight
+    const double s1 = std::max(std::min(s[r], w * l1), 1e-3 * s[r]);
+    const double s2 = std::max(std::min(s[r], w * l2), 1e-3 * s[r]);
+    Eigen::Matrix2d E;
+    E.col(0) = e1;
+    E.col(1) = e2;
+    L[r] = E * Eigen::Vector2d(s1, s2).asDiagonal();
+  }
+  return L;
+}
+
+Eigen::VectorXd HsltMutation::perturbed_target(const HsltPath& X, const std::vector<Eigen::Matrix2d>& L, Uniforms& u) const {
+  Eigen::VectorXd t = hslt_constraints(X);
+  for (size_t r = 0; r < L.size(); ++r) {
+    if (L[r].isZero(0.0)) continue;
+    const Vec2 w = u.next2();
+    const double len = std::sqrt(-2.0 * std::log1p(-w.x));  // Box-Muller
+    const double phi = 2.0 * kPi * w.y;
+    t.segment<2>(static_cast<Eigen::Index>(2 * r)) += L[r] * Eigen::Vector2d(len * std::cos(phi), len * std::sin(phi));
+  }
+  return t;
+}
+
+bool HsltMutation::perturbation_density(const std::vector<Eigen::Matrix2d>& L, const HsltPath& X, const HsltPath& Y,
+                                        double* g, std::vector<bool>* dirac) const {
+  const Eigen::VectorXd hx = hslt_constraints(X), hy = hslt_constraints(Y);
+  dirac->assign(L.size(), false);
+  double log_g = 0.0;
+  for (size_t r = 0; r < L.size(); ++r) {
+    const Eigen::Vector2d d = hy.segment<2>(static_cast<Eigen::Index>(2 * r)) - hx.segment<2>(static_cast<Eigen::Index>(2 * r));
+    if (L[r].isZero(0.0)) {
+      (*dirac)[r] = true;
+      if (!(d.norm() < kDiracHoldTolerance)) return false;
+      continue;
+    }
+    const Eigen::Vector2d z = L[r].inverse() * d;
+    log_g += -std::log(2.0 * kPi * std::abs(L[r].determinant())) - 0.5 * z.squaredNorm();
+  }
+  *g = std::exp(log_g);
+  return true;
+}
+
+HsltWalkResult HsltMutation::walk(const HsltPath& X, const Eigen::VectorXd& target) const {
+  return hslt_walk(ctx_->world->geometry(), X, target, options_);
+}
+
+MltPath HsltMutation::path_at(const MltPath& x, const HsltPath& walked) const {
+  MltPath y = x;
+  const Scene& scene = ctx_->world->geometry();
+  for (int i = 1; i < x.segments(); ++i) {
+    const HsltVertex& h = walked.vertices[static_cast<size_t>(i)];
+    y.v[static_cast<size_t>(i)] = surface_vertex(*ctx_, scene.surface_at(h.shape_id, h.prim_id, h.uv));
+  }
+  return y;
+}
+
+bool HsltMutation::lands(const HsltPath& X, const HsltPath& Y) const {
+  const HsltWalkResult r = walk(X, hslt_constraints(Y));
+  return r.status == HsltWalkStatus::kConverged && hslt_max_vertex_distance(r.path, Y) < kLandingTolerance;
+}
+
+double HsltMutation::measure_factor(const HsltPath& Y, const std::vector<bool>& dirac) const {
+  const HsltBlocks b = hslt_constraint_blocks(Y);
+  const HsltBlockLu lu(b);
+  if (!lu.ok()) return 0.0;
+  // Kaplanyan 2014, Eq. 11 in area measure: det J_area = det J_uv / prod |dp/du x dp/dv|.
+  double log_m = lu.log_abs_determinant();
+  for (int i = 1; i < Y.segments(); ++i) log_m -= std::log(Y.vertices[static_cast<size_t>(i)].area_element());
+  double m = std::exp(log_m);
+  for (int i = 1; i < Y.segments(); ++i) {
+    if (!dirac[static_cast<size_t>(i - 1)]) continue;
+    const HsltVertex& v = Y.vertices[static_cast<size_t>(i)];
+    const HsltHalfVector hv = hslt_half_vector(Y, i);
+    // |dh / d omega_prev| at fixed omega_next (Eq. 10 with the roles of the directions swapped);
+    // dh^perp = |<h, n>| dh (App. A).
+    const double dh_dw = half_vector_jacobian(hv.w_next, hv.w_prev, v.eta_next, v.eta_prev);
+    m /= dh_dw * std::abs(glm::dot(hv.h, v.n));
+  }
+  return std::isfinite(m) ? m : 0.0;
+}
+
+HsltMutation::DensityParts HsltMutation::density_parts(const MltPath& x, const MltPath& y) const {
+  DensityParts p;
+  const int k = x.segments();
+  if (y.segments() != k || !applicable(x) || !applicable(y)) return p;
+  if (!same_vertex(x.v[0], y.v[0]) || !same_vertex(x.v[static_cast<size_t>(k)], y.v[static_cast<size_t>(k)])) return p;
+  const std::optional<HsltPath> X = hslt_path(x);
+  if (!X) return p;
+  const std::optional<HsltPath> Y = hslt_path(y, &*X);
+  if (!Y) return p;
+  std::vector<bool> dirac;
+  double g = 0.0;
+  if (!perturbation_density(step_factors(x, *X), *X, *Y, &g, &dirac)) return p;
+  p.structure = true;
+  p.perturbation = g;
+  p.measure = measure_factor(*Y, dirac);
+  if (!(p.perturbation > 0.0) || !(p.measure > 0.0)) return p;
+  p.forward_lands = lands(*X, *Y);
+  if (!p.forward_lands) return p;
+  // Sec. 5.2: the reverse walk, from y in its own frames to H^perp(x) in the same frames.
+  const std::optional<HsltPath> Y2 = hslt_path(y);
+  const std::optional<HsltPath> X2 = Y2 ? hslt_path(x, &*Y2) : std::nullopt;
+  p.reverse_lands = X2 && lands(*Y2, *X2);
+  return p;
+}
+
+double HsltMutation::density(const MltPath& x, const MltPath& y) const {
+  const DensityParts p = density_parts(x, y);
+  if (!p.structure || !p.forward_lands || !p.reverse_lands) return 0.0;
+  return p.perturbation * p.measure;
+}
+
+std::optional<MltPath> HsltMutation::propose(const MltPath& x, Uniforms& u) const {
+  HsltCounters& c = *counters_;
+  if (!applicable(x)) {
+    c.not_applicable.fetch_add(1, kRelaxed);
+    return std::nullopt;
+  }
+  const std::optional<HsltPath> X = hslt_path(x);
+  if (!X) {
+    c.not_applicable.fetch_add(1, kRelaxed);
+    return std::nullopt;
+  }
+  c.proposals.fetch_add(1, kRelaxed);
+  // Fig. 12: mutate_half_vectors (Sec. 6.1), h_to_positions (Sec. 5), reverse check (Sec. 5.2).
+  const Eigen::VectorXd target = perturbed_target(*X, step_factors(x, *X), u);
+  const HsltWalkResult r = walk(*X, target);
+  c.forward_status[static_cast<size_t>(r.status)].fetch_add(1, kRelaxed);
+  c.iterations_all.fetch_add(r.iterations, kRelaxed);
+  if (r.status != HsltWalkStatus::kConverged) return std::nullopt;
+  c.iterations_converged.fetch_add(r.iterations, kRelaxed);
+  MltPath y = path_at(x, r.path);
+  const std::optional<HsltPath> Y2 = applicable(y) ? hslt_path(y) : std::nullopt;
+  const std::optional<HsltPath> X2 = Y2 ? hslt_path(x, &*Y2) : std::nullopt;
+  if (!X2 || !hslt_path(y, &*X) || !lands(*Y2, *X2)) {
+    c.non_reversible.fetch_add(1, kRelaxed);
+    return std::nullopt;
+  }
+  c.generated.fetch_add(1, kRelaxed);
+  return y;
+}
+
+PathMutationList make_hslt_mixture(const PathContext& ctx, const PathMutationSettings& s,
+                                   const std::shared_ptr<HsltCounters>& counters, double gamma, bool stratify) {
+  const PathMutationInfo* bidir = find_path_mutation("bidirectional");
+  const PathMutationInfo* hslt = find_path_mutation("hslt");
+  PathMutationList out;
+  out.push_back(bidir->make(ctx, s, bidir->weight));
+  out.push_back(std::make_shared<const PathProposalMutation<HsltMutation>>(
+      "hslt", hslt->weight, HsltMutation(ctx, gamma, counters, stratify), hslt_applies));
+  return out;
+}
+
+}  // namespace tb::path_space
+
+namespace tb {
+
+int64_t render_hslt(const World& world, const RenderSettings& settings, Film& film) {
+  using namespace path_space;
+  const auto counters = std::make_shared<HsltCounters>();
+  MltOptions o;
+  const auto param = [&settings](const char* name, double fallback) {
+    const auto it = settings.params.find(name);
+    return it == settings.params.end() ? fallback : it->second;
+  };
+  const double gamma = param("gamma", HsltMutation::kDefaultGamma);
+  const bool stratify = param("stratify", 1.0) != 0.0;
+  if (!(gamma > 0.0)) throw std::invalid_argument("hslt: parameter 'gamma' must be > 0");
+  o.mutations = [counters, gamma, stratify](const PathContext& ctx, const PathMutationSettings& s) {
+    return make_hslt_mixture(ctx, s, counters, gamma, stratify);
+  };
+  const MltStats stats = run_mlt(world, settings, film, o);
+  if (settings.report) {
+    settings.report->mutations.clear();
+    for (const auto& m : stats.mutations)
+      settings.report->mutations.push_back({m.name, m.proposed, m.accepted, m.errors});
+    settings.report->mutations_total = stats.mutations_total;
+    settings.report->mutations_per_second = stats.mutations_per_second();
+  }
+  const HsltCountsSnapshot c = snapshot(*counters);
+  double acc = 0.0, acc_generated = 0.0;
+  for (const auto& m : stats.mutations)
+    if (m.name == "hslt") {
+      acc = m.acceptance_rate();
+      acc_generated = m.proposed > m.failed ? double(m.accepted) / double(m.proposed - m.failed) : 0.0;
+    }
+  // Kaplanyan 2014, Table 3 (per half-vector proposal on a path it applies to).
+  fmt::print("hslt (Table 3): {} half-vector proposals ({} selected on paths it does not apply to); iterations "
+             "{:.2f} per converged walk / {:.2f} per walk; generation rate {:.1f}%; non-reversible {} = {:.3f}% of the "
+             "converged walks; acceptance {:.1f}% of the generated ({:.1f}% of the selected); {:.3g} mutations/s (all "
+             "mutations)\n",
+             c.proposals, c.not_applicable, c.iterations_per_converged(), c.iterations_per_walk(),
+             100.0 * c.generation_rate(), c.non_reversible, 100.0 * c.non_reversible_fraction(), 100.0 * acc_generated, 100.0 * acc,
+             stats.mutations_per_second());
+  return stats.chains;
+}
+
+}  // namespace tb

@@ -1,0 +1,609 @@
+// Checks of the half-vector mutation (Kaplanyan, Hanika, Dachsbacher 2014, Sec. 5, 6.1;
+// lib/mcmc/path_space/hslt_mutation.h, docs/hslt.md):
+//  - mcmc.hslt.pairwise.{glossy,dg_mirrors}: pi(x) T(x->y) a(x->y) = pi(y) T(y->x) a(y->x) to 1e-9
+//    relative on seeded BDPT path pairs (16 x 16, max depth 4) of scenes/glossy.json and
+//    scenes/dg-curved-mirrors.json (diffuse floor + smooth mirrors: Dirac vertices held), the
+//    mutation alone in the renderer's Metropolis-Hastings kernel; counts of the forward walks by
+//    status and of the non-reversible moves in the details;
+//  - mcmc.hslt.mixture.pairwise.glossy: the same for the integrator's kernel (bidirectional +
+//    half-vector mixture with path-dependent selection), bidirectional T from its reference assembly;
+//  - mcmc.hslt.reversibility: on candidate pairs (x, y = the forward walk's result, before any reverse
+//    test; gamma = 1 to provoke non-reversible moves) of both scenes, the stated densities against an
+//    independent replay of the two walks (hslt_walk called directly): T(x->y) > 0 only if the walk
+//    x -> H(y) returns y, T(y->x) > 0 iff both walks return (the reverse test of Sec. 5.2); valid only
+//    when non-reversible candidates occur;
+//  - mcmc.hslt.proposal_chi2.glossy: for a fixed path light -> rough gold sphere -> camera (k = 2),
+//    the proposed y_1 projected onto the tangent plane of x_1, q = ((y_1 - x_1).s, (y_1 - x_1).t),
+//    against the stated T(x -> y) / |<ng(y_1), n(x_1)>| (the area-to-plane Jacobian), chi-square
+//    with failures in their own cell (alpha 1e-5); this is what sees the change of measure;
+//  - mcmc.hslt.proposal_chi2.dg_mirror: light -> floor -> curved mirror -> camera, only h_1
+//    perturbed, the mirror vertex y_2 in the tangent plane of x_2 against T times the area factor of
+//    the Dirac-pinned y_1 (sees the Dirac factors of the density);
+//  - mcmc.hslt.image.glossy: the integrator's mixture through run_mlt against BDPT (8 x 8, depth 3);
+//  - negative controls (validate/mcmc/hslt_broken.h), passing when the broken variant IS caught:
+//    mcmc.hslt.reversibility.no_reverse_check.negative_control (T without the landing tests),
+//    mcmc.hslt.proposal_chi2.missing_jacobian.negative_control (T without |det J_area|),
+//    mcmc.hslt.proposal_chi2.dg_mirror.no_dirac_factor.negative_control (T without the Dirac
+//    factors) and mcmc.hslt.image.glossy.missing_jacobian.negative_control.
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "estimators/mcmc/metropolis_hastings.h"
+#include "lib/core/hash.h"
+#include "lib/core/parallel.h"
+#include "lib/differential/hslt_constraints.h"
+#include "lib/integrator/bdpt.h"
+#include "lib/mcmc/path_space/hslt_mutation.h"
+#include "lib/mcmc/path_space/mlt.h"
+#include "lib/mcmc/path_space/path_mutations.h"
+#include "lib/mcmc/path_space/start_paths.h"
+#include "lib/path/dirac.h"
+#include "validate/chi2/sampler_chi2.h"
+#include "validate/mcmc/hslt_broken.h"
+#include "validate/mcmc/pairwise_balance.h"
+#include "validate/mcmc/pairwise_record.h"
+#include "validate/mcmc/path_space/reference_density.h"
+#include "validate/mcmc/path_space/scene_cache.h"
+#include "validate/registry.h"
+#include "validate/render/render_compare.h"
+
+namespace tb {
+namespace {
+
+using namespace tb::path_space;
+constexpr double kAlpha = 1e-5;
+constexpr int kMaxDepth = 4;
+constexpr int kRes = 16;
+
+const LoadedScene& scene(const std::string& file) { return cached_scene(file, kRes); }
+
+nlohmann::json counters_json(const HsltCounters& c) {
+  const HsltCountsSnapshot s = snapshot(c);
+  nlohmann::json status = nlohmann::json::object();
+  for (int i = 0; i < kHsltWalkStatusCount; ++i)
+    status[hslt_walk_status_name(static_cast<HsltWalkStatus>(i))] = s.status[static_cast<size_t>(i)];
+  return {{"proposals", s.proposals},
+          {"forward_walks", status},
+          {"iterations_per_converged_walk", s.iterations_per_converged()},
+          {"iterations_per_walk", s.iterations_per_walk()},
+          {"non_reversible", s.non_reversible},
+          {"non_reversible_fraction_of_converged", s.non_reversible_fraction()},
+          {"generated", s.generated}};
+}
+
+// A BDPT path the mutation applies to (any path after 4096 tries: the pair then has no flux).
+std::function<MltPath(Uniforms&)> applicable_start(const LoadedScene& sc, const HsltMutation& m) {
+  return [&sc, &m](Uniforms& u) {
+    MltPath any;
+    for (int a = 0; a < 4096; ++a)
+      if (auto p = sample_bdpt_path(sc.ctx, u, kMaxDepth, 2)) {
+        if (m.applicable(*p)) return *p;
+        any = *p;
+      }
+    return any;
+  };
+}
+
+// ---- pairwise detailed balance ---------------------------------------------------------------
+CheckResult hslt_pairwise(const CheckContext& cx, const std::string& name, const std::string& file) {
+  const LoadedScene& sc = scene(file);
+  const auto counters = std::make_shared<HsltCounters>();
+  const auto mut = std::make_shared<const PathProposalMutation<HsltMutation>>(
+      "hslt", 1.0, HsltMutation(sc.ctx, HsltMutation::kDefaultGamma, counters), hslt_applies);
+  const HsltMutation& hm = mut->proposal();
+  const auto start = applicable_start(sc, hm);
+  const PathMutation& m = *mut;
+  const auto kernel = mcmc::MetropolisHastings(PathTarget{&sc.ctx}, mcmc::SingleProposal(MutationProposal{&m, nullptr}));
+  using K = decltype(kernel);
+  const auto ref = [&hm](int, const MltPath& x, const MltPath& y) { return hm.density(x, y); };
+  const WithReferenceDensity<K, decltype(ref)> k(kernel, ref, 8);
+  const auto r = mcmc::check_pairwise_balance<WithReferenceDensity<K, decltype(ref)>>(
+      k, start, cx.size(300, 3000), cx.seed, hash_string(name));
+  CheckResult res = pairwise_record(r, name);
+  res.details["walks"] = counters_json(*counters);
+  const HsltCountsSnapshot s = snapshot(*counters);
+  res.message = fmt::format("{}: {}; {} proposals: {} converged ({:.2f} iterations each, {:.2f} per walk), {} "
+                            "non-reversible",
+                            file, res.message, s.proposals, s.converged, s.iterations_per_converged(),
+                            s.iterations_per_walk(), s.non_reversible);
+  return res;
+}
+
+// The integrator's kernel: the mixture of make_hslt_mixture (bidirectional + half-vector, c_j(x)
+// normalised over the mutations that apply to x, so moves that change applicability carry
+// c_j(y)/c_j(x)), references from reference_density_of (the independent assembly for the
+// bidirectional mutation), on BDPT pairs of any structure.
+CheckResult hslt_mixture_pairwise(const CheckContext& cx, const std::string& name, const std::string& file) {
+  const LoadedScene& sc = scene(file);
+  const auto counters = std::make_shared<HsltCounters>();
+  PathMutationSettings ms;
+  ms.max_segments = kMaxDepth + 1;
+  const PathMixture mix(make_hslt_mixture(sc.ctx, ms, counters));
+  const auto kernel = mcmc::MetropolisHastings(PathTarget{&sc.ctx}, mix);
+  using K = decltype(kernel);
+  std::vector<std::function<double(const MltPath&, const MltPath&)>> refs;
+  for (int j = 0; j < mix.components(); ++j) refs.push_back(reference_density_of(mix.component(j), sc.ctx));
+  const auto ref = [&refs](int j, const MltPath& x, const MltPath& y) { return refs[static_cast<size_t>(j)](x, y); };
+  const WithReferenceDensity<K, decltype(ref)> k(kernel, ref, 8);
+  const std::function<MltPath(Uniforms&)> start = [&sc](Uniforms& u) {
+    MltPath any;
+    for (int a = 0; a < 64; ++a)
+      if (auto p = sample_bdpt_path(sc.ctx, u, kMaxDepth)) return *p;
+    return any;
+  };
+  const auto r = mcmc::check_pairwise_balance<WithReferenceDensity<K, decltype(ref)>>(
+      k, start, cx.size(400, 4000), cx.seed, hash_string(name));
+  CheckResult res = pairwise_record(r, name);
+  res.details["walks"] = counters_json(*counters);
+  res.message = fmt::format("{}: {}; {} half-vector proposals", file, res.message, snapshot(*counters).proposals);
+  return res;
+}
+
+// ---- reversibility: stated densities against a replay of the walks -----------------------------
+using DensityFn = std::function<double(const HsltMutation&, const MltPath&, const MltPath&)>;
+
+struct ReplayCounts {
+  int64_t candidates = 0, non_reversible = 0, reversible = 0;
+  int64_t forward_errors = 0;   // T(x->y) > 0 although the walk x -> H(y) does not return y
+  int64_t reverse_errors = 0;   // T(y->x) > 0 although the reverse walk does not return x
+  int64_t missed = 0;           // both walks return, yet T(y->x) = 0
+};
+
+// The walk x -> H^perp(y) with the mutation's options, called directly; returns y?
+bool replay_returns(const HsltMutation& m, const HsltPath& from, const HsltPath& to) {
+  const HsltWalkResult r = hslt_walk(m.context().world->geometry(), from, hslt_constraints(to), m.walk_options());
+  if (r.status != HsltWalkStatus::kConverged) return false;
+  double d = 0;
+  for (int i = 1; i < from.segments(); ++i)
+    d = std::max(d, glm::length(r.path.vertices[static_cast<size_t>(i)].p - to.vertices[static_cast<size_t>(i)].p));
+  return d < HsltMutation::kLandingTolerance;
+}
+
+ReplayCounts replay_scene(const CheckContext& cx, const std::string& name, const std::string& file, const DensityFn& stated) {
+  const LoadedScene& sc = scene(file);
+  // gamma = 1 (10 x Sec. 6.1's step) without the stratification of Sec. 6.2 (which would cap the
+  // steps): non-reversible walks must occur for the check to test anything.
+  const HsltMutation m(sc.ctx, 1.0, nullptr, false);
+  const auto start = applicable_start(sc, m);
+  const int64_t n = cx.size(3000, 30000);
+  std::vector<ReplayCounts> out(static_cast<size_t>(n));
+  const uint64_t key = hash_string(name + "." + file);
+  parallel_for(static_cast<size_t>(n), [&](size_t i) {
+    Rng rng = Rng::for_sample(cx.seed, key, i);
+    RngUniforms u(rng);
+    const MltPath x = start(u);
+    if (!m.applicable(x)) return;
+    const std::optional<HsltPath> X = m.hslt_path(x);
+    if (!X) return;
+    const HsltWalkResult r = m.walk(*X, m.perturbed_target(*X, m.step_factors(x, *X), u));
+    if (r.status != HsltWalkStatus::kConverged) return;
+    const MltPath y = m.path_at(x, r.path);
+    const std::optional<HsltPath> Y = m.hslt_path(y, &*X);
+    const std::optional<HsltPath> Y2 = m.hslt_path(y);
+    const std::optional<HsltPath> X2 = Y2 ? m.hslt_path(x, &*Y2) : std::nullopt;
+    if (!Y || !X2 || !m.applicable(y)) return;
+    ReplayCounts& c = out[i];
+    c.candidates = 1;
+    const bool fwd = replay_returns(m, *X, *Y), rev = replay_returns(m, *Y2, *X2);
+    const double t_xy = stated(m, x, y), t_yx = stated(m, y, x);
+    (fwd && rev ? c.reversible : c.non_reversible) = 1;
+    c.forward_errors = t_xy > 0.0 && !fwd;
+    c.reverse_errors = t_yx > 0.0 && !(fwd && rev);
+    c.missed = fwd && rev && !(t_yx > 0.0);
+  });
+  ReplayCounts s;
+  for (const ReplayCounts& c : out) {
+    s.candidates += c.candidates;
+    s.non_reversible += c.non_reversible;
+    s.reversible += c.reversible;
+    s.forward_errors += c.forward_errors;
+    s.reverse_errors += c.reverse_errors;
+    s.missed += c.missed;
+  }
+  return s;
+}
+
+CheckResult hslt_reversibility(bool broken, const CheckContext& cx, const std::string& name) {
+  const DensityFn stated = broken ? DensityFn([](const HsltMutation& m, const MltPath& x, const MltPath& y) {
+    return HsltNoReverseCheck(m).density(x, y);
+  })
+                                  : DensityFn([](const HsltMutation& m, const MltPath& x, const MltPath& y) {
+                                      return m.density(x, y);
+                                    });
+  CheckResult res;
+  res.statistic_name = "pairs with a stated density the walks do not realise";
+  bool valid = true, clean = true;
+  std::string msg;
+  for (const std::string file : {"glossy.json", "dg-curved-mirrors.json"}) {
+    const ReplayCounts c = replay_scene(cx, name, file, stated);
+    const int64_t errors = c.forward_errors + c.reverse_errors + c.missed;
+    res.statistic += static_cast<double>(errors);
+    res.samples += c.candidates;
+    valid = valid && c.non_reversible > 0 && c.reversible >= c.candidates / 2;
+    clean = clean && errors == 0;
+    res.details[file] = {{"candidates", c.candidates},       {"reversible", c.reversible},
+                         {"non_reversible", c.non_reversible}, {"forward_errors", c.forward_errors},
+                         {"reverse_errors", c.reverse_errors}, {"missed", c.missed}};
+    msg += fmt::format("{}{}: {} candidate moves ({} reversible, {} not): stated T(x->y) > 0 without the forward walk "
+                       "{}, T(y->x) > 0 without the reverse walk {}, reversible with T(y->x) = 0 {}",
+                       msg.empty() ? "" : "; ", file, c.candidates, c.reversible, c.non_reversible, c.forward_errors,
+                       c.reverse_errors, c.missed);
+  }
+  if (!valid) msg += " (NOT VALID: needs non-reversible candidates and >= 50% reversible ones on every scene)";
+  res.passed = valid && (broken ? !clean : clean);
+  if (broken) msg = (res.passed ? "broken variant rejected as required: " : "BROKEN VARIANT NOT DETECTED: ") + msg;
+  res.message = msg;
+  return res;
+}
+
+// A chart on the tangent plane adapted to the proposal's first-order spread: q = D^{-1} U^T p for
+// a plane point p, with M = U D V^T the first-order map from the standard normal z of the step
+// (delta = L z) to p, so that q ~ V^T z is standard normal to first order. Densities per unit chart area are those per plane area
+// times det D.
+struct Chart {
+  Eigen::Matrix2d to_chart, to_plane;
+  double det = 1;
+  static Chart of(const Eigen::Matrix2d& M) {
+    const Eigen::JacobiSVD<Eigen::Matrix2d> svd(M, Eigen::ComputeFullU);
+    Chart c;
+    const Eigen::Vector2d d = svd.singularValues();
+    c.to_plane = svd.matrixU() * d.asDiagonal();
+    c.to_chart = c.to_plane.inverse();
+    c.det = d(0) * d(1);
+    return c;
+  }
+  Vec2 chart(const Vec3& p, const HsltFrame& fr) const {
+    const Eigen::Vector2d q = to_chart * Eigen::Vector2d(glm::dot(p, fr.s), glm::dot(p, fr.t));
+    return Vec2(q(0), q(1));
+  }
+  Vec3 plane(const Vec2& q, const HsltFrame& fr) const {
+    const Eigen::Vector2d p = to_plane * Eigen::Vector2d(q.x, q.y);
+    return fr.s * p(0) + fr.t * p(1);
+  }
+};
+constexpr double kSupportSigmas = 8.0;  // radial mass beyond 8 standard deviations: exp(-32)
+constexpr int kBins = 24;
+
+// ---- chi-square of the proposed vertex in the tangent plane of x_1 -----------------------------
+// A fixed path light -> x_1 (rough conductor) -> camera from seeded BDPT samples.
+std::optional<MltPath> chi2_path(const LoadedScene& sc, const HsltMutation& m, uint64_t seed) {
+  Rng rng = Rng::for_sample(seed, hash_string("mcmc.hslt.proposal_chi2.path"), 0);
+  RngUniforms u(rng);
+  for (int a = 0; a < 200000; ++a) {
+    auto p = sample_bdpt_path(sc.ctx, u, 1, 2);
+    if (!p || p->segments() != 2 || !m.applicable(*p)) continue;
+    const PathVertex& v = p->v[1];
+    if (v.bsdf->name() != "rough_conductor" || v.bsdf->beckmann_roughness() < 0.15) continue;  // the gold sphere
+    // Away from the silhouette, so that the chart is regular over the support.
+    if (std::abs(glm::dot(v.hit.ng, direction(v, p->v[2]))) < 0.5) continue;
+    return p;
+  }
+  return std::nullopt;
+}
+
+CheckResult hslt_chi2(bool broken, const CheckContext& cx, const std::string& name) {
+  const LoadedScene& sc = scene("glossy.json");
+  // gamma = 1 and a desired image change of 0.5% (not 2%): the ray-differential step of Sec. 6.2
+  // (~0.03) is then below the BSDF step (0.09), so the anisotropic stratified step is the one
+  // sampled and stated (at the defaults the BSDF step is the smaller one on this path).
+  const HsltMutation m(sc.ctx, 1.0, nullptr, true, 0.005);
+  CheckResult res;
+  res.statistic_name = "p-value";
+  const std::optional<MltPath> xo = chi2_path(sc, m, cx.seed);
+  if (!xo) {
+    res.passed = false;
+    res.message = "no path light -> rough gold sphere -> camera found";
+    return res;
+  }
+  const MltPath& x = *xo;
+  const HsltPath X = *m.hslt_path(x);
+  const HsltFrame fr = hslt_frame(X.vertices[1]);
+  const Vec3 o = X.vertices[1].p, n = X.vertices[1].n;
+  // Chart of the first-order map dq = P B^{-1} L z from the standard normal z of the step.
+  const HsltBlocks b = hslt_constraint_blocks(X);
+  Eigen::Matrix2d P;
+  const HsltVertex& v1 = X.vertices[1];
+  P << glm::dot(fr.s, v1.dpdu), glm::dot(fr.s, v1.dpdv), glm::dot(fr.t, v1.dpdu), glm::dot(fr.t, v1.dpdv);
+  const Eigen::Matrix2d L = m.step_factors(x, X)[0];
+  const Chart ch = Chart::of(P * b.B[0].inverse() * L);
+  const double sigma = m.sigmas(x)[0];
+  const Eigen::Vector2d steps = Eigen::JacobiSVD<Eigen::Matrix2d>(L).singularValues();
+  const double half = kSupportSigmas;
+  const Scene& geo = sc.world->geometry();
+  // q -> y: the point of x_1's shape below o + q on the ray along -n (first hit of that shape).
+  const auto y_of = [&](const Vec2& q) -> std::optional<MltPath> {
+    Ray ray{o + ch.plane(q, fr) + n * 0.5, -n, 0.0, kInfinity};
+    for (int s = 0; s < 16; ++s) {
+      const auto h = geo.intersect(ray);
+      if (!h) return std::nullopt;
+      if (h->shape_id == v1.shape_id) {
+        MltPath y = x;
+        y.v[1] = surface_vertex(sc.ctx, *h);
+        return y;
+      }
+      ray.t_min = h->t + 1e-9;
+    }
+    return std::nullopt;
+  };
+  const auto stated = [&](const MltPath& a, const MltPath& c) {
+    return broken ? hslt_density_without_measure(m, a, c) : m.density(a, c);
+  };
+  SamplerChi2Options opt;
+  opt.samples = cx.size(20000, 200000);
+  opt.seed = cx.seed;
+  opt.key = hash_string(name);
+  opt.quadrature_tolerance = 1e-6;
+  opt.quadrature_max_depth = 2;
+  const SamplerChi2Result r = chi2_test(
+      Chi2Domain::rectangle(Vec2(-half, -half), Vec2(half, half), kBins, kBins),
+      [&](Uniforms& u) -> std::optional<Vec2> {
+        const auto y = m.propose(x, u);
+        if (!y) return std::nullopt;
+        return ch.chart(y->v[1].hit.p - o, fr);
+      },
+      [&](const Vec2& q) {
+        const auto y = y_of(q);
+        if (!y) return 0.0;
+        const double c = std::abs(glm::dot(y->v[1].hit.ng, n));
+        return c > 0 ? stated(x, *y) * ch.det / c : 0.0;
+      },
+      opt);
+  res.statistic = r.p_value();
+  res.samples = r.samples;
+  res.details = r.details();
+  res.details["support_half_width"] = half;
+  res.details["sigma"] = sigma;
+  res.details["step"] = {steps(0), steps(1)};
+  const bool ok = r.passed(kAlpha) && !(r.pdf_integral > 1.0 + 1e-3);
+  res.passed = broken ? !ok : ok;
+  res.message = fmt::format("x_1 on the gold sphere, BSDF sigma {:.4g}, step {:.3g} x {:.3g} (Sec. 6.2), support +-{} "
+                            "standard deviations of the first-order spread: {}",
+                            sigma, steps(0), steps(1), half, r.message());
+  if (broken) res.message = (res.passed ? "broken variant rejected as required: " : "BROKEN VARIANT NOT DETECTED: ") + res.message;
+  return res;
+}
+
+// ---- chi-square through a specular vertex: light -> diffuse floor -> curved mirror -> camera ----
+// Only h_1 (the floor vertex) is perturbed; the mirror vertex y_2 follows, and y_1 is pinned by the
+// Dirac constraint at y_2. In the engine's convention (lib/path/dirac.h) the dropped delta at y_2
+// is delta(omega_prev - omega*) in the solid angle of the direction towards y_1, so the density of
+// y_2 in area is T(x -> y) |y_1 - y_2|^2 / |cos theta_{y_1}| and, on the tangent plane of x_2,
+// that divided by |<ng(y_2), n(x_2)>|. This sees the Dirac factor |d omega_prev / dh| / |<h, n>|.
+std::optional<MltPath> dirac_chi2_path(const LoadedScene& sc, const HsltMutation& m, uint64_t seed) {
+  Rng rng = Rng::for_sample(seed, hash_string("mcmc.hslt.dirac_chi2.path"), 0);
+  RngUniforms u(rng);
+  for (int a = 0; a < 400000; ++a) {
+    auto p = sample_bdpt_path(sc.ctx, u, 2, 3);
+    if (!p || p->segments() != 3 || !m.applicable(*p)) continue;
+    const PathVertex &a1 = p->v[1], &a2 = p->v[2];
+    if (is_dirac_surface(a1) || !is_dirac_surface(a2) || std::isfinite(a1.bsdf->beckmann_roughness())) continue;
+    // The sphere or cylinder mirror seen well inside its silhouette, the floor not grazing.
+    if (std::abs(glm::dot(a2.hit.ng, direction(a2, p->v[3]))) < 0.5) continue;
+    if (std::abs(glm::dot(a1.hit.ng, direction(a1, a2))) < 0.3) continue;
+    return p;
+  }
+  return std::nullopt;
+}
+
+enum class DiracFault { kNone, kNoDiracFactor };
+
+CheckResult hslt_dirac_chi2(DiracFault fault, const CheckContext& cx, const std::string& name) {
+  const LoadedScene& sc = scene("dg-curved-mirrors.json");
+  // gamma = 0.02: a small step keeps the map h_1 -> y_2 near its linearisation over the support.
+  const HsltMutation m(sc.ctx, 0.02);
+  CheckResult res;
+  res.statistic_name = "p-value";
+  const std::optional<MltPath> xo = dirac_chi2_path(sc, m, cx.seed);
+  if (!xo) {
+    res.passed = false;
+    res.message = "no path light -> floor -> mirror -> camera found";
+    return res;
+  }
+  const MltPath& x = *xo;
+  const HsltPath X = *m.hslt_path(x);
+  const HsltVertex& v2 = X.vertices[2];
+  const HsltFrame fr = hslt_frame(v2);
+  const Vec3 o = v2.p, n = v2.n, cam = X.vertices[3].p;
+  // Chart of the first-order map dq = P_2 (J^{-1})_{2,1} L z from the standard normal z of the step.
+  const Eigen::MatrixXd Jinv = hslt_dense_jacobian(hslt_constraint_blocks(X)).inverse();
+  Eigen::Matrix2d P;
+  P << glm::dot(fr.s, v2.dpdu), glm::dot(fr.s, v2.dpdv), glm::dot(fr.t, v2.dpdu), glm::dot(fr.t, v2.dpdv);
+  const Eigen::Matrix2d L = m.step_factors(x, X)[0];
+  const Chart ch = Chart::of(P * Jinv.block<2, 2>(2, 0) * L);
+  const double sigma = m.sigmas(x)[0];
+  const Eigen::Vector2d steps = Eigen::JacobiSVD<Eigen::Matrix2d>(L).singularValues();
+  const double half = kSupportSigmas;
+  const Scene& geo = sc.world->geometry();
+  const auto first_hit_on = [&](Ray ray, uint32_t shape) -> std::optional<Hit> {
+    const auto h = geo.intersect(ray);
+    if (!h || h->shape_id != shape) return std::nullopt;
+    return h;
+  };
+  // q -> y: y_2 below o + q on the mirror, y_1 by reflecting the camera ray there, then snapped onto
+  // the constraint (h_2 held at x's value exactly, as every proposal) by a walk from x.
+  const auto y_of = [&](const Vec2& q) -> std::optional<MltPath> {
+    Ray down{o + ch.plane(q, fr) + n * 0.5, -n, 0.0, kInfinity};
+    const auto h2 = first_hit_on(down, v2.shape_id);
+    if (!h2) return std::nullopt;
+    const Vec3 wo = glm::normalize(cam - h2->p);
+    const Vec3 wi = -wo + 2.0 * glm::dot(wo, h2->n) * h2->n;
+    const auto h1 = first_hit_on(Ray{h2->p, wi, 1e-6, kInfinity}, X.vertices[1].shape_id);
+    if (!h1) return std::nullopt;
+    MltPath y = x;
+    y.v[1] = surface_vertex(sc.ctx, *h1);
+    y.v[2] = surface_vertex(sc.ctx, *h2);
+    const std::optional<HsltPath> Y = m.hslt_path(y, &X);
+    if (!Y) return std::nullopt;
+    Eigen::VectorXd target = hslt_constraints(X);
+    target.segment<2>(0) = hslt_constraints(*Y).segment<2>(0);
+    const HsltWalkResult r = m.walk(X, target);
+    if (r.status != HsltWalkStatus::kConverged) return std::nullopt;
+    return m.path_at(x, r.path);
+  };
+  const auto stated = [&](const MltPath& a, const MltPath& c) {
+    if (fault == DiracFault::kNone) return m.density(a, c);
+    const HsltMutation::DensityParts p = m.density_parts(a, c);
+    if (!p.structure || !p.forward_lands || !p.reverse_lands) return 0.0;
+    const std::optional<HsltPath> A = m.hslt_path(a);
+    const std::optional<HsltPath> Y = m.hslt_path(c, &*A);
+    return p.perturbation * m.measure_factor(*Y, std::vector<bool>(2, false));
+  };
+  SamplerChi2Options opt;
+  opt.samples = cx.size(20000, 200000);
+  opt.seed = cx.seed;
+  opt.key = hash_string(name);
+  opt.quadrature_tolerance = 1e-6;
+  opt.quadrature_max_depth = 2;
+  const SamplerChi2Result r = chi2_test(
+      Chi2Domain::rectangle(Vec2(-half, -half), Vec2(half, half), kBins, kBins),
+      [&](Uniforms& u) -> std::optional<Vec2> {
+        const auto y = m.propose(x, u);
+        if (!y) return std::nullopt;
+        return ch.chart(y->v[2].hit.p - o, fr);
+      },
+      [&](const Vec2& q) {
+        const auto y = y_of(q);
+        if (!y) return 0.0;
+        const PathVertex &y1 = y->v[1], &y2 = y->v[2];
+        const Vec3 d = y2.hit.p - y1.hit.p;
+        const double dist2 = glm::dot(d, d);
+        const double cos1 = std::abs(glm::dot(y1.hit.ng, d)) / std::sqrt(dist2);
+        const double cq = std::abs(glm::dot(y2.hit.ng, n));
+        return cos1 > 0 && cq > 0 ? stated(x, *y) * dist2 / cos1 / cq * ch.det : 0.0;
+      },
+      opt);
+  res.statistic = r.p_value();
+  res.samples = r.samples;
+  res.details = r.details();
+  res.details["support_half_width"] = half;
+  res.details["sigma"] = sigma;
+  res.details["step"] = {steps(0), steps(1)};
+  const bool ok = r.passed(kAlpha) && !(r.pdf_integral > 1.0 + 1e-3);
+  const bool broken = fault != DiracFault::kNone;
+  res.passed = broken ? !ok : ok;
+  res.message = fmt::format("light -> floor -> mirror (shape {}) -> camera, BSDF sigma_1 {:.4g}, step {:.3g} x {:.3g} "
+                            "(Sec. 6.2), support +-{} standard deviations of the first-order spread: {}",
+                            v2.shape_id, sigma, steps(0), steps(1), half, r.message());
+  if (broken) res.message = (res.passed ? "broken variant rejected as required: " : "BROKEN VARIANT NOT DETECTED: ") + res.message;
+  return res;
+}
+
+// ---- image: the hslt integrator's mixture against BDPT -------------------------------------------
+// run_mlt over the bidirectional + half-vector mixture (make_hslt_mixture) on the 8 x 8 glossy scene
+// at max depth 3, each chain one Welch sample, against BDPT (compare_channels: Šidák over pixels
+// and channels, Stouffer, sum z^2), alpha 1e-5. broken: the half-vector mutation's T without the
+// change of measure.
+CheckResult hslt_image(bool broken, const CheckContext& cx, const std::string& name) {
+  constexpr int kImage = 8;
+  const std::unique_ptr<World> world = load_scene_at_resolution("glossy.json", kImage, kImage);
+  Film ref(kImage, kImage);
+  RenderSettings rs;
+  rs.spp = cx.size(2048, 8192);
+  rs.passes = 32;
+  rs.max_depth = 3;
+  rs.seed = hash_values(cx.seed, hash_string(name + ".bdpt"));
+  render_bdpt(*world, rs, ref);
+  Film film(kImage, kImage);
+  RenderSettings st;
+  st.passes = cx.size(48, 128);
+  st.spp = st.passes * cx.size(160, 160);
+  st.max_depth = 3;
+  st.seed = hash_values(cx.seed, hash_string(name));
+  const auto counters = std::make_shared<HsltCounters>();
+  MltOptions o;
+  o.mutations = [counters, broken](const PathContext& ctx, const PathMutationSettings& s) {
+    PathMutationList l = make_hslt_mixture(ctx, s, counters);
+    if (broken)
+      l[1] = std::make_shared<const PathProposalMutation<HsltWithoutMeasure>>(
+          "hslt", find_path_mutation("hslt")->weight, HsltWithoutMeasure(HsltMutation(ctx, HsltMutation::kDefaultGamma, counters)),
+          [](const HsltWithoutMeasure& m, const MltPath& x) { return m.applicable(x); });
+    return l;
+  };
+  const MltStats s = run_mlt(*world, st, film, o);
+  const ChannelCompare c = compare_channels(film.welch(), ref.welch(), kAlpha);
+  const HsltCountsSnapshot hc = snapshot(*counters);
+  CheckResult res;
+  res.passed = broken ? c.rejects() : !c.rejects();
+  res.statistic_name = "p (Šidák over pixel channels)";
+  res.statistic = c.p_value();
+  res.p_value = c.p_value();
+  res.alpha = kAlpha;
+  res.samples = s.mutations_total;
+  double acc = 0.0;
+  for (const auto& m : s.mutations)
+    if (m.name == "hslt") acc = m.acceptance_rate();
+  res.message = fmt::format("{} chains x {} mutations, {} half-vector proposals (acceptance {:.3f}) against BDPT: {}",
+                            s.chains, s.mutations_total / std::max<int64_t>(1, s.chains), hc.proposals, acc, c.message());
+  if (broken) res.message = (res.passed ? "broken variant rejected as required: " : "BROKEN VARIANT NOT DETECTED: ") + res.message;
+  res.details = c.details();
+  res.details["walks"] = counters_json(*counters);
+  for (const auto& m : s.mutations) res.details["acceptance_" + m.name] = m.acceptance_rate();
+  return res;
+}
+
+void add(const std::string& name, const std::string& desc, CheckKind kind,
+         std::function<CheckResult(const CheckContext&, const std::string&)> f) {
+  Registry::global().add(
+      Check{.name = name, .description = desc, .kind = kind, .run = [=](const CheckContext& cx) { return f(cx, name); }});
+}
+
+const bool registered = [] {
+  const std::string p = "mcmc.hslt.";
+  add(p + "pairwise.glossy",
+      "Half-vector mutation (Kaplanyan 2014, Sec. 5, 6.1) alone: pi T a symmetric to 1e-9 on seeded glossy-scene path "
+      "pairs; walk statuses and non-reversible moves counted",
+      CheckKind::kDeterministic, [](const CheckContext& cx, const std::string& n) { return hslt_pairwise(cx, n, "glossy.json"); });
+  add(p + "pairwise.dg_mirrors",
+      "Half-vector mutation alone on dg-curved-mirrors (diffuse floor, smooth mirrors held at h = n): pi T a symmetric "
+      "to 1e-9 on seeded path pairs",
+      CheckKind::kDeterministic,
+      [](const CheckContext& cx, const std::string& n) { return hslt_pairwise(cx, n, "dg-curved-mirrors.json"); });
+  add(p + "mixture.pairwise.glossy",
+      "The hslt integrator's kernel (bidirectional + half-vector mixture, path-dependent selection): pi c T a "
+      "symmetric to 1e-9 on seeded glossy-scene BDPT pairs, bidirectional T against its reference assembly",
+      CheckKind::kDeterministic,
+      [](const CheckContext& cx, const std::string& n) { return hslt_mixture_pairwise(cx, n, "glossy.json"); });
+  add(p + "reversibility",
+      "Half-vector mutation: stated T(x->y), T(y->x) against a replay of the forward and reverse walks on candidate "
+      "pairs (glossy, dg-curved-mirrors; gamma = 1): positive exactly when the walks return (Sec. 5.2)",
+      CheckKind::kDeterministic, [](const CheckContext& cx, const std::string& n) { return hslt_reversibility(false, cx, n); });
+  add(p + "reversibility.no_reverse_check.negative_control",
+      "Negative control: the reversibility check must reject T stated without the walks' landing tests",
+      CheckKind::kDeterministic, [](const CheckContext& cx, const std::string& n) { return hslt_reversibility(true, cx, n); });
+  add(p + "proposal_chi2.glossy",
+      "Half-vector mutation from a fixed light -> gold sphere -> camera path: proposed y_1 in the tangent plane of x_1 "
+      "against the stated T / |cos| (chi-square, alpha 1e-5)",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) { return hslt_chi2(false, cx, n); });
+  add(p + "proposal_chi2.missing_jacobian.negative_control",
+      "Negative control: the chi-square must reject T stated without the change of measure |det J_area| (Eq. 11)",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) { return hslt_chi2(true, cx, n); });
+  add(p + "proposal_chi2.dg_mirror",
+      "Half-vector mutation through a specular vertex (light -> floor -> curved mirror -> camera, floor half vector "
+      "perturbed, mirror held): proposed y_2 in the tangent plane of x_2 against the stated T times the area factor "
+      "of the Dirac-pinned y_1 (chi-square, alpha 1e-5)",
+      CheckKind::kStatistical,
+      [](const CheckContext& cx, const std::string& n) { return hslt_dirac_chi2(DiracFault::kNone, cx, n); });
+  add(p + "proposal_chi2.dg_mirror.no_dirac_factor.negative_control",
+      "Negative control: the chi-square through the mirror must reject T without the Dirac factors |d omega / dh| / "
+      "|<h, n>| of the held specular half vectors",
+      CheckKind::kStatistical,
+      [](const CheckContext& cx, const std::string& n) { return hslt_dirac_chi2(DiracFault::kNoDiracFactor, cx, n); });
+  add(p + "image.glossy",
+      "Integrator hslt's mixture (bidirectional + half-vector, run_mlt; >= 48 chains as Welch samples) against BDPT "
+      "on the 8 x 8 glossy scene at max depth 3 (Welch t, Stouffer, sum z^2, alpha 1e-5)",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) { return hslt_image(false, cx, n); });
+  add(p + "image.glossy.missing_jacobian.negative_control",
+      "Negative control: the image check must reject the mixture with the half-vector T stated without |det J_area|",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) { return hslt_image(true, cx, n); });
+  return true;
+}();
+
+}  // namespace
+}  // namespace tb
