@@ -28,7 +28,9 @@ std::vector<IntegratorParameter> pss_parameters() {
   return {{"bootstrap", "bootstrap samples per pass (default: PssSettings::bootstrap_for)"},
           {"chains", "chains per pass (default 64)"},
           {"large_step", "large-step probability (default 0.3)"},
-          {"sigma", "small-step standard deviation (default 0.01)"}};
+          {"sigma", "small-step standard deviation (default 0.01)"},
+          {"resample_levels", "MMLT: 1 draws each chain's path length with its start from the joint bootstrap "
+                              "(pbrt-v3), 0 (default) fixes the mutations per length by a pilot bootstrap"}};
 }
 
 std::vector<IntegratorParameter> photon_map_parameters(bool progressive) {

@@ -439,9 +439,10 @@ void apply_params(const std::map<std::string, double>& params, PssSettings* p) {
     else if (name == "chains" && v >= 1) p->chains = static_cast<int64_t>(v);
     else if (name == "large_step" && v >= 0 && v <= 1) p->large_step_probability = v;
     else if (name == "sigma" && v > 0 && v < 1) p->sigma = v;
+    else if (name == "resample_levels" && (v == 0 || v == 1)) p->resample_levels = v == 1;
     else
       throw std::invalid_argument(fmt::format("PSS parameter {} = {} is unknown or out of range (bootstrap >= 1, "
-                                              "chains >= 1, 0 <= large_step <= 1, 0 < sigma < 1)",
+                                              "chains >= 1, 0 <= large_step <= 1, 0 < sigma < 1, resample_levels 0 or 1)",
                                               name, v));
   }
 }
