@@ -329,13 +329,7 @@ int64_t render_hslt(const World& world, const RenderSettings& settings, Film& fi
     return make_hslt_mixture(ctx, s, counters, gamma, stratify);
   };
   const MltStats stats = run_mlt(world, settings, film, o);
-  if (settings.report) {
-    settings.report->mutations.clear();
-    for (const auto& m : stats.mutations)
-      settings.report->mutations.push_back({m.name, m.proposed, m.accepted, m.errors});
-    settings.report->mutations_total = stats.mutations_total;
-    settings.report->mutations_per_second = stats.mutations_per_second();
-  }
+  fill_report(stats, settings.report);
   const HsltCountsSnapshot c = snapshot(*counters);
   double acc = 0.0, acc_generated = 0.0;
   for (const auto& m : stats.mutations)

@@ -97,15 +97,19 @@ MltStats run_mlt(const World& world, const RenderSettings& st, Film& film, const
 
 namespace tb {
 
+namespace path_space {
+void fill_report(const MltStats& stats, RunReport* report) {
+  if (!report) return;
+  report->mutations.clear();
+  for (const auto& m : stats.mutations) report->mutations.push_back({m.name, m.proposed, m.accepted, m.errors});
+  report->mutations_total = stats.mutations_total;
+  report->mutations_per_second = stats.mutations_per_second();
+}
+}  // namespace path_space
+
 int64_t render_mlt(const World& world, const RenderSettings& settings, Film& film) {
   const path_space::MltStats stats = path_space::run_mlt(world, settings, film);
-  if (settings.report) {
-    settings.report->mutations.clear();
-    for (const auto& m : stats.mutations)
-      settings.report->mutations.push_back({m.name, m.proposed, m.accepted, m.errors});
-    settings.report->mutations_total = stats.mutations_total;
-    settings.report->mutations_per_second = stats.mutations_per_second();
-  }
+  path_space::fill_report(stats, settings.report);
   return stats.chains;
 }
 

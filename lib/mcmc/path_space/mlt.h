@@ -72,6 +72,10 @@ struct MltStats {
 
 MltStats run_mlt(const World& world, const RenderSettings& settings, Film& film, const MltOptions& options = {});
 
+// Copies a run's per-mutation counts and rate into the render report (null: nothing); shared by
+// the mlt, ramlt-* and hslt entry points.
+void fill_report(const MltStats& stats, RunReport* report);
+
 }  // namespace tb::path_space
 
 namespace tb {

@@ -303,13 +303,7 @@ namespace tb {
 int64_t render_ramlt(const World& world, const RenderSettings& settings, Film& film,
                      const path_space::RamltOptions& options) {
   const path_space::RamltStats stats = path_space::run_ramlt(world, settings, film, options);
-  if (settings.report) {
-    settings.report->mutations.clear();
-    for (const auto& m : stats.mlt.mutations)
-      settings.report->mutations.push_back({m.name, m.proposed, m.accepted, m.errors});
-    settings.report->mutations_total = stats.mlt.mutations_total;
-    settings.report->mutations_per_second = stats.mlt.mutations_per_second();
-  }
+  path_space::fill_report(stats.mlt, settings.report);
   return stats.mlt.chains;
 }
 
