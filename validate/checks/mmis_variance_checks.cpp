@@ -96,21 +96,32 @@ VarianceStudy study(const CheckContext& ctx, bool broken, const std::string& key
       s.message += fmt::format("variance increases from n = {} to n = {} (z = {:.2f}); ", kNs[k], kNs[k + 1], z.statistic);
     }
   }
-  // The extra variance over the reference must shrink: s²_1 - s²_16 > 0 significantly.
+  // The paper's claim is a limit: the extra variance of MMIS_n over the reference vanishes as n grows.
+  // MMIS_n is a different unbiased estimator (its denominators sum sampled conditional densities,
+  // among them the one that drew the sample), so nothing orders it against the reference and it may
+  // end slightly below. What the claim implies at this budget: s²_1 - s²_16 > 0 significantly, and
+  // at n = 16 the ratio to the reference is within 1 ± kApproach (equivalence: both one-sided
+  // z-tests reject at alpha; the band is ours, stated in the record).
   {
+    constexpr double kApproach = 0.25;
     const auto& a = s.per_n.front();
     const auto& c = s.per_n.back();
     const double se = std::hypot(a.variance_std_error(), c.variance_std_error());
     const auto z = stats::z_test_greater(a.variance() - c.variance(), se, 0.0);
     s.details["decrease_z"] = z.statistic;
     s.details["decrease_p"] = z.p_value;
-    const double excess1 = a.variance() - s.reference, excess16 = c.variance() - s.reference;
-    s.details["excess_n1"] = excess1;
-    s.details["excess_n16"] = excess16;
-    if (!z.rejects(alpha) || std::abs(excess16) >= std::abs(excess1)) {
+    const double ratio16 = c.variance() / s.reference, se16 = c.variance_std_error() / s.reference;
+    const auto lo = stats::z_test_greater(ratio16, se16, 1.0 - kApproach);
+    const auto hi = stats::z_test_greater(1.0 + kApproach, se16, ratio16);
+    s.details["ratio_n16"] = ratio16;
+    s.details["ratio_n16_se"] = se16;
+    s.details["approach_band"] = kApproach;
+    s.details["equivalence_p"] = std::max(lo.p_value, hi.p_value);
+    if (!z.rejects(alpha) || !lo.rejects(alpha) || !hi.rejects(alpha)) {
       s.passed = false;
-      s.message += fmt::format("no significant approach to the reference (s²_1 = {:.4g}, s²_16 = {:.4g}, ref {:.4g}, z = {:.2f}); ",
-                               a.variance(), c.variance(), s.reference, z.statistic);
+      s.message += fmt::format("no significant approach to the reference (s²_1 = {:.4g}, s²_16 = {:.4g}, ref {:.4g}, fall z = "
+                               "{:.2f}; ratio at n = 16 {:.3f} ± {:.3f}, band 1 ± {}); ",
+                               a.variance(), c.variance(), s.reference, z.statistic, ratio16, se16, kApproach);
     }
   }
   // The quadrature reference against replicates of the reference MIS (exact marginals).
@@ -161,7 +172,7 @@ CheckResult run_variance(const CheckContext& ctx) {
 }
 
 TB_REGISTER_CHECK({.name = "mmis.variance_vs_n",
-                   .description = "MMIS_n variance (Fig. 1 bottom, N = 64, T = 4) is non-increasing in n and approaches "
+                   .description = "MMIS_n variance (Fig. 1 bottom, N = 64, T = 4) is non-increasing in n and ends within 1 ± 0.25 of "
                                   "the exact reference MIS variance (quadrature, itself z-tested against replicates)",
                    .kind = CheckKind::kStatistical,
                    .run = run_variance});

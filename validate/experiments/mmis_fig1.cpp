@@ -141,9 +141,10 @@ void run_top(const ExperimentContext& ctx, ExperimentReport& rep) {
                                    "{:.3g}] (99% CI)",
                                    beats_s ? "HOLDS" : "FAILS", rs.var, rs.lo, rs.hi));
   const auto zc = stats::z_test(wc.variance(), wc.variance_std_error(), exact_classical);
-  rep.claims.push_back(fmt::format("{}: sampled classical-only variance agrees with quadrature (z = {:.2f})",
-                                   std::abs(zc.statistic) < 4.4 ? "HOLDS" : "FAILS", zc.statistic));
-  rep.passed = rep.passed && beats_c && beats_s;
+  const bool quadrature_agrees = std::abs(zc.statistic) < 4.4;
+  rep.claims.push_back(fmt::format("{}: sampled classical-only variance agrees with quadrature (|z| = {:.2f} < 4.4)",
+                                   quadrature_agrees ? "HOLDS" : "FAILS", std::abs(zc.statistic)));
+  rep.passed = rep.passed && beats_c && beats_s && quadrature_agrees;
   rep.data["top"] = {{"integrand", f.description},
                      {"budget_N", kN},
                      {"replicates", reps},
@@ -213,6 +214,8 @@ void run_bottom(const ExperimentContext& ctx, ExperimentReport& rep) {
   int best_nc = 0, best_ne = 0;
   double eff_c1 = 0, eff_e1 = 0;
   bool monotone = true;
+  bool cost_exact = true;  // counted pdf evaluations equal n·N·T for every n
+  std::string counted;
   for (size_t k = 0; k < ns.size(); ++k) {
     const int n = ns[k];
     const checks::Realisation r = [&, n](Uniforms& u) { return estimate_mmis_budget(f, techs, n, kN, u).value; };
@@ -221,6 +224,8 @@ void run_bottom(const ExperimentContext& ctx, ExperimentReport& rep) {
     Rng rng(1);
     RngUniforms u(rng);
     const int64_t evals = estimate_mmis_budget(f, techs, n, kN, u).pdf_evals;
+    cost_exact = cost_exact && evals == static_cast<int64_t>(n) * kN * kT;
+    counted += fmt::format("{}{}", k ? ", " : "", evals);
     const double tc = seconds_per_estimate(r, timing_reps * 4, ctx.seed);
     const double te = seconds_per_estimate(re, timing_reps, ctx.seed);
     const auto v = variance_ci(ws.back());
@@ -257,24 +262,45 @@ void run_bottom(const ExperimentContext& ctx, ExperimentReport& rep) {
   eff_plot.series = {ec, ee};
   rep.plots.push_back(var_plot);
   rep.plots.push_back(eff_plot);
-  const double ratio16 = ws.back().variance() / reference, ratio1 = ws.front().variance() / reference;
-  const bool approaches = std::abs(ratio16 - 1.0) < std::abs(ratio1 - 1.0);
-  rep.claims.push_back(fmt::format("{}: MMIS_n variance is non-increasing in n within its standard error (z < 4.26 between "
+  // The paper's claim (Sec. 3.2): the additional variance of MMIS_n over the reference vanishes as n
+  // grows. It is a limit, not an ordering: MMIS_n is a different unbiased estimator (its denominators
+  // are sums of sampled conditional densities, among them the one that drew the sample), so it may
+  // end below the reference. What the claim implies at this budget: the variance falls significantly
+  // from n = 1 to n = 16, and at n = 16 the ratio to the reference is within kApproach of 1 (an
+  // equivalence test: both one-sided z-tests reject at alpha; the band is ours, stated).
+  constexpr double kApproach = 0.25;
+  const double z_crit = stats::normal_quantile(1.0 - 1e-5);
+  const auto& w1 = ws.front();
+  const auto& w16 = ws.back();
+  const double ratio16 = w16.variance() / reference, ratio1 = w1.variance() / reference;
+  const double se16 = w16.variance_std_error() / reference;
+  const double z_fall = (w1.variance() - w16.variance()) / std::hypot(w1.variance_std_error(), w16.variance_std_error());
+  const bool falls = z_fall > z_crit;
+  const bool within = (ratio16 - (1.0 - kApproach)) / se16 > z_crit && ((1.0 + kApproach) - ratio16) / se16 > z_crit;
+  const bool approaches = falls && within;
+  rep.claims.push_back(fmt::format("{}: MMIS_n variance is non-increasing in n within its standard error (z < {:.2f} between "
                                    "consecutive n)",
-                                   monotone ? "HOLDS" : "FAILS"));
-  rep.claims.push_back(fmt::format("{}: the extra variance vanishes as n grows: Var(MMIS_1)/Var(ref) = {:.3g}, "
-                                   "Var(MMIS_16)/Var(ref) = {:.3g}",
-                                   approaches ? "HOLDS" : "FAILS", ratio1, ratio16));
-  rep.claims.push_back(fmt::format("HOLDS: cost is n·N·T pdf evaluations (counted, linear in n); best n by efficiency: "
-                                   "{} for the cheap pdf, {} for the expensive pdf",
-                                   best_nc, best_ne));
-  rep.passed = rep.passed && monotone && approaches;
+                                   monotone ? "HOLDS" : "FAILS", z_crit));
+  rep.claims.push_back(fmt::format("{}: the extra variance vanishes as n grows: Var(MMIS_n)/Var(ref) falls from {:.3g} "
+                                   "(n = 1) to {:.3g} ± {:.2g} (n = 16; z = {:.1f}), within 1 ± {} at n = 16 (equivalence "
+                                   "test, z > {:.2f} each side)",
+                                   approaches ? "HOLDS" : "FAILS", ratio1, ratio16, se16, z_fall, kApproach, z_crit));
+  rep.claims.push_back(fmt::format("{}: cost is n·N·T pdf evaluations: counted {} for n = 1, 2, 4, 8, 16 (expected 256, "
+                                   "512, 1024, 2048, 4096); best n by efficiency: {} for the cheap pdf, {} for the "
+                                   "expensive pdf",
+                                   cost_exact ? "HOLDS" : "FAILS", counted, best_nc, best_ne));
+  rep.passed = rep.passed && monotone && approaches && cost_exact;
 
   // Random subsets: n = 4, the defensive technique always, k of the three partial ones, budget N kept
   // by averaging N / (4 (1 + k)) realisations.
-  Table st{.title = "Fig. 1 bottom: random subset of techniques (n = 4, defensive always included, N = 64)",
-           .header = {"techniques per realisation", "variance [CI]", "ratio to reference", "pdf evals per estimate",
-                      "time cheap pdf"},
+  // N / (4 (1 + k)) realisations of 4 (1 + k) samples: 64 samples for k = 1 and 3, but 5 realisations
+  // of 12 = 60 samples for k = 2 (64 is not a multiple of 12). The ratio to the reference is therefore
+  // also given at equal budget, scaled by samples / 64 (the variance of an average of independent
+  // realisations falls as 1 / samples).
+  Table st{.title = "Fig. 1 bottom: random subset of techniques (n = 4, defensive always included; N = 64 for k = 1, 3, "
+                    "N = 60 for k = 2)",
+           .header = {"techniques per realisation", "samples per estimate", "variance [CI]", "ratio to reference",
+                      "ratio at equal budget (x N / 64)", "pdf evals per estimate", "time cheap pdf"},
            .rows = {}};
   nlohmann::json subset_rows = nlohmann::json::array();
   for (int kk : {1, 2, 3}) {
@@ -293,9 +319,12 @@ void run_bottom(const ExperimentContext& ctx, ExperimentReport& rep) {
     const auto v = variance_ci(w);
     const double tc = seconds_per_estimate(r, timing_reps * 4, ctx.seed);
     const int64_t evals = static_cast<int64_t>(realisations) * (n * active) * (n * active);
-    st.rows.push_back({fmt::format("defensive + {} of 3", kk), fmt_ci(v), fmt::format("{:.3f}", v.var / reference),
+    const int used = realisations * n * active;
+    st.rows.push_back({fmt::format("defensive + {} of 3", kk), fmt::format("{}", used), fmt_ci(v),
+                       fmt::format("{:.3f}", v.var / reference), fmt::format("{:.3f}", v.var / reference * used / kN),
                        fmt::format("{}", evals), fmt::format("{:.3g} us", tc * 1e6)});
-    subset_rows.push_back({{"k", kk}, {"variance", v.var}, {"variance_se", v.se}, {"pdf_evals", evals}, {"seconds", tc}});
+    subset_rows.push_back({{"k", kk}, {"samples", used}, {"variance", v.var}, {"variance_se", v.se},
+                           {"ratio_equal_budget", v.var / reference * used / kN}, {"pdf_evals", evals}, {"seconds", tc}});
   }
   rep.tables.push_back(st);
   ctx.progress(0.9);
