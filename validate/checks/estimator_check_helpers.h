@@ -144,4 +144,40 @@ inline CheckResult unbiased_family(const CheckContext& ctx, const std::vector<Un
   return res;
 }
 
+// West et al. 2022, Sec. 3.2 (Fig. 1 bottom): "the additional variance vanishes as n increases".
+// A limit, not an ordering: MMIS_n is a different unbiased estimator from the reference MIS with
+// exact marginals (its denominators sum sampled conditional densities, among them the one that drew
+// the sample), so it may end slightly below the reference. What the claim implies at a fixed budget:
+// the variance falls significantly from the smallest to the largest n (one-sided z of the difference
+// of the two sample variances), and at the largest n the ratio to the reference lies within
+// 1 ± band (equivalence: both one-sided z-tests reject at alpha). The band is ours, not the paper's.
+struct VanishingExcess {
+  double ratio_first = 0.0, ratio_last = 0.0, ratio_last_se = 0.0;
+  double fall_z = 0.0, fall_p = 1.0, equivalence_p = 1.0;
+  bool falls = false, within = false;
+  bool holds() const { return falls && within; }
+};
+
+inline VanishingExcess vanishing_excess(const stats::Welford& first, const stats::Welford& last, double reference,
+                                        double band, double alpha) {
+  VanishingExcess v;
+  v.ratio_first = first.variance() / reference;
+  v.ratio_last = last.variance() / reference;
+  v.ratio_last_se = last.variance_std_error() / reference;
+  const auto fall = stats::z_test_greater(first.variance() - last.variance(),
+                                          std::hypot(first.variance_std_error(), last.variance_std_error()), 0.0);
+  v.fall_z = fall.statistic;
+  v.fall_p = fall.p_value;
+  const auto lo = stats::z_test_greater(v.ratio_last, v.ratio_last_se, 1.0 - band);
+  const auto hi = stats::z_test_greater(1.0 + band, v.ratio_last_se, v.ratio_last);
+  v.equivalence_p = std::max(lo.p_value, hi.p_value);
+  v.falls = fall.rejects(alpha);
+  v.within = lo.rejects(alpha) && hi.rejects(alpha);
+  return v;
+}
+
+// The band of `vanishing_excess` for Fig. 1 bottom (N = 64, T = 4, n = 1 ... 16): at quick size the
+// standard error of the n = 16 ratio is about 0.03, so a band of 0.15 already failed once at 0.975.
+inline constexpr double kMmisApproachBand = 0.25;
+
 }  // namespace tb::checks
