@@ -197,7 +197,9 @@ int main(int argc, char** argv) {
   render->add_option("--param", rargs.params,
                      "NAME=VALUE: an integrator parameter (repeatable; --list shows each integrator's)");
   render->add_option("--partition", rargs.partition,
-                     "ramlt-lens / ramlt-multichain: region partition of the adaptation (fixed, global, grid, quadtree; default grid)");
+                     "ramlt-lens / ramlt-multichain: region partition of the adaptation: fixed, global, grid, quadtree "
+                     "(screen space), and for ramlt-multichain grid4d, quadtree4d (screen grid x direction at the first "
+                     "non-specular vertex); default grid");
   render->add_flag("--list", rargs.list, "List the integrators and exit");
   render->add_flag("--no-progress", rargs.no_progress, "No progress line on stderr");
 

@@ -11,6 +11,11 @@
 //                     al., Sec. 6.1-6.2), one region at first; split(leaf) refines a leaf into four
 //                     (the driver decides when: Otsu Sec. 6.2, visits above M_split). States
 //                     outside the box fall in the nearest boundary leaf.
+//  - GridQuadtreePartition (4d, "quadtree4d"): Otsu et al.'s 4d partition (Sec. 5.4, Eq. 7; Sec.
+//                     6.3, Fig. 7): an n x n grid over dimensions 0-1 (screen space), each cell
+//                     holding its own QuadtreePartition over dimensions 2-3 (the cylindrical
+//                     direction at the first non-specular vertex); the regions are the pairs
+//                     (cell, leaf). "grid4d" is the 4d GridPartition (N_top^2 x N_bottom^2 cells).
 #pragma once
 
 #include <algorithm>
@@ -23,6 +28,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace tb::mcmc {
@@ -72,11 +78,12 @@ template <size_t N>
 class GridPartition final : public RegionPartition<std::array<double, N>> {
  public:
   using State = std::array<double, N>;
-  GridPartition(State lo, State hi, std::array<int, N> cells) : lo_(lo), hi_(hi), cells_(cells) {
+  GridPartition(State lo, State hi, std::array<int, N> cells, std::string name = "grid")
+      : lo_(lo), hi_(hi), cells_(cells), name_(std::move(name)) {
     for (size_t d = 0; d < N; ++d)
       if (!(hi[d] > lo[d]) || cells[d] < 1) throw std::invalid_argument("GridPartition: empty box or no cells");
   }
-  std::string name() const override { return "grid"; }
+  std::string name() const override { return name_; }
   int regions() const override {
     int r = 1;
     for (int c : cells_) r *= c;
@@ -97,6 +104,7 @@ class GridPartition final : public RegionPartition<std::array<double, N>> {
  private:
   State lo_, hi_;
   std::array<int, N> cells_;
+  std::string name_;
 };
 
 // Otsu et al., Sec. 6.2: regions are the leaves; initially the root (the whole box). Splitting leaf
@@ -163,8 +171,59 @@ class QuadtreePartition final : public RegionPartition<std::array<double, 2>> {
   std::vector<int> leaf_node_;
 };
 
+// Otsu et al., Sec. 6.3 (Fig. 7): a grid over (x0, x1) whose every cell holds a quadtree over
+// (x2, x3). Regions are numbered cell by cell at first (cell l's root is region l); splitting
+// region r (QuadtreePartition::split in its cell) keeps r for the first child and appends the
+// other three at regions(), so every other index stays valid (as the 2d quadtree). cell_of(r) is
+// the screen cell of region r.
+class GridQuadtreePartition final : public RegionPartition<std::array<double, 4>> {
+ public:
+  using State = std::array<double, 4>;
+  GridQuadtreePartition(State lo, State hi, int cells, int max_depth = 12)
+      : top_({lo[0], lo[1]}, {hi[0], hi[1]}, {cells, cells}) {
+    for (int l = 0; l < cells * cells; ++l) {
+      trees_.emplace_back(std::array<double, 2>{lo[2], lo[3]}, std::array<double, 2>{hi[2], hi[3]}, max_depth);
+      global_.push_back({l});
+      owner_.push_back({l, 0});
+    }
+  }
+  std::string name() const override { return "quadtree4d"; }
+  int regions() const override { return static_cast<int>(owner_.size()); }
+  int region_of(const State& x) const override {
+    const int l = top_.region_of({x[0], x[1]});
+    const int leaf = trees_[static_cast<size_t>(l)].region_of({x[2], x[3]});
+    return global_[static_cast<size_t>(l)][static_cast<size_t>(leaf)];
+  }
+  bool adapts() const override { return true; }
+  int cells() const { return top_.regions(); }
+  int cell_of(int region) const { return owner_[static_cast<size_t>(region)][0]; }
+  const QuadtreePartition& tree(int cell) const { return trees_[static_cast<size_t>(cell)]; }
+  int leaf_of(int region) const { return owner_[static_cast<size_t>(region)][1]; }
+  bool can_split(int region) const { return tree(cell_of(region)).can_split(leaf_of(region)); }
+  // Splits region r in its cell's quadtree; returns the first appended region (-1: at max depth).
+  int split(int region) {
+    const int l = cell_of(region);
+    QuadtreePartition& t = trees_[static_cast<size_t>(l)];
+    const int first_local = t.split(leaf_of(region));
+    if (first_local < 0) return -1;
+    const int first = regions();
+    for (int q = 0; q < 3; ++q) {
+      global_[static_cast<size_t>(l)].push_back(first + q);
+      owner_.push_back({l, first_local + q});
+    }
+    return first;
+  }
+
+ private:
+  GridPartition<2> top_;
+  std::vector<QuadtreePartition> trees_;
+  std::vector<std::vector<int>> global_;      // per cell: local leaf -> region
+  std::vector<std::array<int, 2>> owner_;     // region -> (cell, local leaf)
+};
+
 static_assert(Partition<FixedPartition<1>> && Partition<GlobalPartition<2>> && Partition<GridPartition<2>>);
 static_assert(Partition<QuadtreePartition>);
+static_assert(Partition<GridQuadtreePartition>);
 static_assert(Partition<RegionPartition<std::array<double, 1>>>);
 
 // What a registered partition is built from: a box of R^N and cells per dimension (used by the
@@ -179,7 +238,7 @@ template <size_t N>
 using PartitionFactory = std::function<std::shared_ptr<const RegionPartition<std::array<double, N>>>(const PartitionBox<N>&)>;
 
 // The partitions by name: "fixed", "global", "grid" (and, in 2d, "quadtree": the root alone; its
-// refinement needs the non-const QuadtreePartition). register_partition adds one at run time.
+// refinement needs the non-const QuadtreePartition; in 4d, "grid4d" and "quadtree4d"). register_partition adds one at run time.
 template <size_t N>
 std::map<std::string, PartitionFactory<N>>& partition_registry() {
   static std::map<std::string, PartitionFactory<N>> r = [] {
@@ -190,6 +249,17 @@ std::map<std::string, PartitionFactory<N>>& partition_registry() {
     };
     if constexpr (N == 2)
       m["quadtree"] = [](const PartitionBox<N>& b) { return std::make_shared<const QuadtreePartition>(b.lo, b.hi); };
+    // Otsu et al., Sec. 5.4 / 6.3: cells[0] x cells[1] screen cells, cells[2] x cells[3] direction
+    // cells per screen cell (grid4d; Sec. 8.1: N_top = 20, N_bottom = 50), or a quadtree per screen
+    // cell (quadtree4d, the roots alone; cells[0] = cells[1] = N_top).
+    if constexpr (N == 4) {
+      m["grid4d"] = [](const PartitionBox<N>& b) {
+        return std::make_shared<const GridPartition<N>>(b.lo, b.hi, b.cells, "grid4d");
+      };
+      m["quadtree4d"] = [](const PartitionBox<N>& b) {
+        return std::make_shared<const GridQuadtreePartition>(b.lo, b.hi, b.cells[0]);
+      };
+    }
     return m;
   }();
   return r;

@@ -24,13 +24,32 @@ class RamltDestinationScale final : public PathMutation {
   double weight(const MltPath& x) const override { return m_->weight(x); }
   std::optional<MltPath> propose(const MltPath& x, Uniforms& u) const override { return m_->propose(x, u); }
   double density(const MltPath& x, const MltPath& y) const override {
-    const P& p = m_->proposal();
-    return p.density_with(x, y, p.scale().sigma(y));
+    return m_->proposal().density_at(x, y, y);
   }
   double scale(const MltPath& x) const override { return m_->scale(x); }
 
  private:
   std::shared_ptr<const RamltMutation<P>> m_;
+};
+
+// The regional adaptive multi-chain perturbation with its density stated with sigma_1 for every
+// direction (the continued levels at sigma_1 instead of sigma_2, Otsu Sec. 5.2), while the
+// proposal draws them at sigma_2: the bug of reading one scale for the whole kernel.
+class RamltMultiChainWithoutSigma2 final : public PathMutation {
+ public:
+  explicit RamltMultiChainWithoutSigma2(std::shared_ptr<const RamltMultiChainMutation> m) : m_(std::move(m)) {}
+  std::string name() const override { return m_->name(); }
+  double weight(const MltPath& x) const override { return m_->weight(x); }
+  std::optional<MltPath> propose(const MltPath& x, Uniforms& u) const override { return m_->propose(x, u); }
+  double density(const MltPath& x, const MltPath& y) const override {
+    const auto& p = m_->proposal();
+    const double s1 = p.scale().sigma(x);
+    return p.density_with(x, y, s1, s1);
+  }
+  double scale(const MltPath& x) const override { return m_->scale(x); }
+
+ private:
+  std::shared_ptr<const RamltMultiChainMutation> m_;
 };
 
 // The truncated-normal angle density stated without the truncation mass Z(sigma) = erf(pi /

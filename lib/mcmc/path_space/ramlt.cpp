@@ -27,9 +27,12 @@ namespace tb::path_space {
 namespace {
 
 struct Observation {
-  int region;
+  int region;   // screen region (sigma_1)
+  int region2;  // 4d region (sigma_2), -1 without a 4d partition
   double acceptance;
 };
+
+bool is_4d(const std::string& p) { return p == "grid4d" || p == "quadtree4d"; }
 
 }  // namespace
 
@@ -47,7 +50,23 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
   // The quadtree is refined between batches: the driver keeps the non-const tree.
   std::shared_ptr<mcmc::QuadtreePartition> tree;
   std::shared_ptr<const ScreenPartition> partition;
-  if (opt.partition == "quadtree") {
+  // 4d (Otsu Sec. 5.4, 6.3): sigma_1 on the N_top grid, sigma_2 on the 4d regions.
+  const bool four_d = is_4d(opt.partition);
+  if (four_d && opt.perturbation != RamltPerturbation::kMultiChain)
+    throw std::invalid_argument("ramlt: the 4d partitions (" + opt.partition + ") are the multi-chain perturbation's");
+  std::shared_ptr<mcmc::GridQuadtreePartition> tree4;
+  std::shared_ptr<const Screen4dPartition> partition2;
+  if (opt.partition == "quadtree4d") {
+    tree4 = std::make_shared<mcmc::GridQuadtreePartition>(std::array<double, 4>{0.0, 0.0, 0.0, 0.0},
+                                                          std::array<double, 4>{1.0, 1.0, 1.0, 1.0}, opt.grid,
+                                                          opt.quadtree_max_depth);
+    partition2 = std::make_shared<const Screen4dPartition>(ctx, tree4);
+  } else if (four_d) {
+    partition2 = Screen4dPartition::make(ctx, opt.partition, opt.grid, opt.grid_bottom);
+  }
+  if (four_d) {
+    partition = ScreenPartition::make(ctx, "grid", opt.grid);
+  } else if (opt.partition == "quadtree") {
     tree = std::make_shared<mcmc::QuadtreePartition>(std::array<double, 2>{0.0, 0.0}, std::array<double, 2>{1.0, 1.0},
                                                      opt.quadtree_max_depth);
     partition = std::make_shared<const ScreenPartition>(ctx, tree);
@@ -55,9 +74,16 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
     partition = ScreenPartition::make(ctx, opt.partition, opt.grid);
   }
   int R = partition->regions();
-  SplittableAdaptation<> adapter(R, opt.adaptation);
+  SplittableAdaptation<> adapter(R, opt.adaptation, opt.keep_record, !partition->adapts());
   auto lambda = std::make_shared<std::vector<double>>(static_cast<size_t>(R), opt.adaptation.lambda0);
-  const RegionalScale scale{partition, lambda};
+  int R2 = partition2 ? partition2->regions() : 0;
+  SplittableAdaptation<> adapter2(R2, opt.adaptation);
+  auto lambda2 = std::make_shared<std::vector<double>>(static_cast<size_t>(R2), opt.adaptation.lambda0);
+  RegionalScale scale{partition, lambda};
+  if (partition2) {
+    scale.partition2 = partition2;
+    scale.lambda2 = lambda2;
+  }
 
   std::shared_ptr<const PathMutation> pert;
   if (opt.perturbation == RamltPerturbation::kLens)
@@ -88,9 +114,12 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
   MltStats& stats = out.mlt;
   for (int k = 0; k < mixture.components(); ++k) stats.mutations.push_back(MutationStats{mixture.name(k)});
   RamltRegionMaps& maps = out.maps;
-  maps.partition = partition->name();
+  maps.partition = four_d ? opt.partition : partition->name();
   maps.regions = R;
   std::vector<int64_t> since_refine(static_cast<size_t>(R), 0);  // reports per leaf since the last refinement
+  std::vector<int64_t> since_refine2(static_cast<size_t>(R2), 0);
+  maps.visits2.assign(static_cast<size_t>(R2), 0);
+  maps.acceptance_sum2.assign(static_cast<size_t>(R2), 0.0);
   int64_t mutations_since_refine = 0;
   const auto t0 = std::chrono::steady_clock::now();
 
@@ -132,9 +161,12 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
       MltChain& ch = chain[c];
       RngUniforms u(rng[c]);
       auto& ls = local[c];
-      int rx = -1;  // region of the current path, recomputed after an accepted move
+      int rx = -1, rx2 = -1;  // regions of the current path, recomputed after an accepted move
       for (int64_t s = 0; s < steps; ++s) {
-        if (rx < 0) rx = partition->region_of(ch.x);
+        if (rx < 0) {
+          rx = partition->region_of(ch.x);
+          rx2 = scale.region2(ch.x);
+        }
         const uint64_t index = static_cast<uint64_t>(done + s);
         const mcmc::StepOutcome o = mcmc::chain_step(ch, u, u, [&](mcmc::Which which, double w) {
           const bool cur = which == mcmc::Which::kCurrent;
@@ -144,7 +176,7 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
           if (r) splats[c].splat(*r, (cur ? ch.fx : ch.fy) * (w / pi), index);
         });
         if (o.component >= 0) ls[static_cast<size_t>(o.component)].add(o);
-        if (o.component == kAdaptive) obs[c].push_back({rx, o.acceptance});  // Algorithm 1, line 11
+        if (o.component == kAdaptive) obs[c].push_back({rx, rx2, o.acceptance});  // Algorithm 1, line 11
         if (o.accepted) rx = -1;
       }
     });
@@ -158,7 +190,14 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
         }
         maps.acceptance_sum[static_cast<size_t>(ob.region)] += ob.acceptance;
         ++maps.visits[static_cast<size_t>(ob.region)];
-        if (partition->adapts()) adapter.observe(ob.region, ob.acceptance);  // lines 11-18, Eq. 4-6
+        adapter.observe(ob.region, ob.acceptance);  // lines 11-18, Eq. 4-6 (frozen: FIXED)
+        if (ob.region2 >= 0) {
+          const size_t r2 = static_cast<size_t>(ob.region2);
+          ++since_refine2[r2];
+          ++maps.visits2[r2];
+          maps.acceptance_sum2[r2] += ob.acceptance;
+          adapter2.observe(ob.region2, ob.acceptance);
+        }
       }
     // Quadtree refinement (Otsu Sec. 6.2): each leaf existing now with more than M_split reports
     // is split once; its children inherit lambda and n_k / 4 (SplittableAdaptation::split).
@@ -184,8 +223,29 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
         B = batch_length(R);
       }
     }
+    // The same refinement on each screen cell's direction quadtree (Otsu Sec. 6.3).
+    if (tree4 && mutations_since_refine >= opt.refine_every) {
+      mutations_since_refine = 0;
+      const int leaves = R2;
+      bool split_any = false;
+      for (int r = 0; r < leaves; ++r) {
+        if (since_refine2[static_cast<size_t>(r)] <= opt.split_threshold || !tree4->can_split(r)) continue;
+        tree4->split(r);
+        adapter2.split(r, 3);
+        maps.visits2[static_cast<size_t>(r)] = 0;
+        maps.acceptance_sum2[static_cast<size_t>(r)] = 0.0;
+        split_any = true;
+      }
+      R2 = tree4->regions();
+      since_refine2.assign(static_cast<size_t>(R2), 0);
+      maps.visits2.resize(static_cast<size_t>(R2), 0);
+      maps.acceptance_sum2.resize(static_cast<size_t>(R2), 0.0);
+      if (split_any) ++maps.refinements;
+    }
     lambda->resize(static_cast<size_t>(R));
     for (int r = 0; r < R; ++r) (*lambda)[static_cast<size_t>(r)] = adapter.lambda(r);
+    lambda2->resize(static_cast<size_t>(R2));
+    for (int r = 0; r < R2; ++r) (*lambda2)[static_cast<size_t>(r)] = adapter2.lambda(r);
     adapt_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - ta).count();
     ++out.batches;
     done += steps;
@@ -226,8 +286,20 @@ RamltStats run_ramlt(const World& world, const RenderSettings& st, Film& film, c
   }
   maps.width = film.width();
   maps.height = film.height();
+  maps.regions2 = R2;
+  maps.lambda2.resize(static_cast<size_t>(R2));
+  maps.updates2.resize(static_cast<size_t>(R2));
+  maps.cell2.resize(static_cast<size_t>(R2));
+  for (int r = 0; r < R2; ++r) {
+    maps.lambda2[static_cast<size_t>(r)] = adapter2.lambda(r);
+    maps.updates2[static_cast<size_t>(r)] = adapter2.updates(r);
+    // grid4d: dimension 0 fastest, so the screen cell is the index modulo N_top^2.
+    maps.cell2[static_cast<size_t>(r)] = tree4 ? tree4->cell_of(r) : r % (opt.grid * opt.grid);
+  }
+  out.record = adapter.record();
   std::shared_ptr<const ScreenCellPartition> cells = tree;
-  if (!cells) cells = mcmc::make_partition<2>(opt.partition, {{0.0, 0.0}, {1.0, 1.0}, {opt.grid, opt.grid}});
+  if (!cells)
+    cells = mcmc::make_partition<2>(four_d ? "grid" : opt.partition, {{0.0, 0.0}, {1.0, 1.0}, {opt.grid, opt.grid}});
   maps.pixel_region.resize(static_cast<size_t>(maps.width) * static_cast<size_t>(maps.height));
   for (int py = 0; py < maps.height; ++py)
     for (int px = 0; px < maps.width; ++px)
@@ -247,12 +319,13 @@ RamltOptions apply_ramlt_params(RamltOptions o, const std::map<std::string, doub
     if (it != params.end()) field = static_cast<std::remove_reference_t<decltype(field)>>(it->second);
   };
   get("grid", o.grid);
+  get("grid_bottom", o.grid_bottom);
   get("refine_every", o.refine_every);
   get("split_threshold", o.split_threshold);
   get("lambda0", o.adaptation.lambda0);
   get("target_acceptance", o.adaptation.target_acceptance);
   get("batch_steps", o.batch_steps);
-  if (o.grid < 1 || o.refine_every < 1 || o.split_threshold < 0 || o.batch_steps < 0 ||
+  if (o.grid < 1 || o.grid_bottom < 1 || o.refine_every < 1 || o.split_threshold < 0 || o.batch_steps < 0 ||
       !(o.adaptation.target_acceptance > 0.0 && o.adaptation.target_acceptance < 1.0))
     throw std::invalid_argument("ramlt: grid, refine_every >= 1, split_threshold, batch_steps >= 0, 0 < a* < 1");
   return o;
@@ -260,6 +333,7 @@ RamltOptions apply_ramlt_params(RamltOptions o, const std::map<std::string, doub
 
 std::vector<std::pair<std::string, std::string>> ramlt_parameter_list() {
   return {{"grid", "N_top: N x N screen cells of the grid partition (default 20, Otsu Sec. 8.1)"},
+          {"grid_bottom", "N_bottom: direction cells per side of the grid4d partition (default 50, Otsu Sec. 8.1)"},
           {"refine_every", "quadtree: mutations of all chains between refinements (default 1e7)"},
           {"split_threshold", "quadtree: reports of a leaf above which it is split (default 5000)"},
           {"lambda0", "initial lambda = log sigma^2 (default 1)"},
@@ -274,6 +348,17 @@ void write_ramlt_maps(const RamltRegionMaps& m, const std::string& base) {
   std::vector<double> acc(static_cast<size_t>(m.regions));
   for (int r = 0; r < m.regions; ++r) acc[static_cast<size_t>(r)] = m.acceptance(r);
   j["acceptance"] = acc;
+  if (m.regions2 > 0) {
+    std::vector<double> acc2(static_cast<size_t>(m.regions2));
+    for (int r = 0; r < m.regions2; ++r)
+      acc2[static_cast<size_t>(r)] = m.visits2[static_cast<size_t>(r)] > 0
+                                         ? m.acceptance_sum2[static_cast<size_t>(r)] /
+                                               static_cast<double>(m.visits2[static_cast<size_t>(r)])
+                                         : 0.0;
+    j["sigma2_regions"] = {{"regions", m.regions2}, {"lambda", m.lambda2},   {"visits", m.visits2},
+                           {"updates", m.updates2}, {"acceptance", acc2}, {"screen_cell", m.cell2}};
+    j["refinements"] = m.refinements;
+  }
   if (!m.leaf_boxes.empty()) {
     j["leaf_boxes"] = m.leaf_boxes;
     j["refinements"] = m.refinements;

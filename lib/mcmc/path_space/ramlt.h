@@ -44,8 +44,12 @@ enum class RamltPerturbation { kLens, kMultiChain };
 
 struct RamltOptions {
   RamltPerturbation perturbation = RamltPerturbation::kLens;
-  std::string partition = "grid";   // fixed | global | grid | quadtree (estimators/mcmc/partition.h)
+  // fixed | global | grid | quadtree (estimators/mcmc/partition.h), and for the multi-chain
+  // perturbation grid4d | quadtree4d (Otsu Sec. 5.4, 6.3: N_top^2 screen cells for sigma_1, each
+  // split into N_bottom^2 direction cells or a quadtree over the direction for sigma_2).
+  std::string partition = "grid";
   int grid = 20;                     // N_top: grid x grid screen cells (Otsu Sec. 8.1)
+  int grid_bottom = 50;              // N_bottom: direction cells per side of grid4d (Otsu Sec. 8.1)
   // Quadtree (Otsu Sec. 6.2, defaults of Sec. 8.1): after every refine_every mutations (all chains
   // together, at the next batch boundary) each leaf with more than split_threshold reports since
   // the last refinement is split once; children inherit lambda and n_k / 4 updates.
@@ -58,6 +62,8 @@ struct RamltOptions {
   // about one update per region (adaptive_chains.h), at most the chain length.
   int64_t batch_steps = 0;
   int64_t bootstrap_per_chain = 0;  // 0: max(256, 4 P / chains), as mlt.h
+  // Keep every batch of L reports of the screen-level adapter in RamltStats::record (validate/).
+  bool keep_record = false;
   // Negative controls (validate/): receives the mixture {bidirectional, perturbation} and returns it
   // with broken wrappers in place (same order).
   std::function<PathMutationList(PathMutationList)> wrap;
@@ -75,6 +81,12 @@ struct RamltRegionMaps {
   std::vector<int> pixel_region;
   std::vector<std::array<double, 4>> leaf_boxes;  // quadtree: (x0, y0, x1, y1) of each region in [0, 1]^2
   int refinements = 0;                            // quadtree refinement passes that split a leaf
+  // 4d partitions (grid4d, quadtree4d): the screen level above holds sigma_1; these the 4d regions
+  // of sigma_2 (lambda, reports, acceptance sum, updates, screen cell of each region).
+  int regions2 = 0;
+  std::vector<double> lambda2, acceptance_sum2;
+  std::vector<int64_t> visits2;
+  std::vector<int> updates2, cell2;
   double acceptance(int r) const {
     return visits[static_cast<size_t>(r)] > 0 ? acceptance_sum[static_cast<size_t>(r)] / static_cast<double>(visits[static_cast<size_t>(r)]) : 0.0;
   }
@@ -85,12 +97,13 @@ struct RamltStats {
   RamltRegionMaps maps;
   int64_t batches = 0, batch_steps = 0;
   double adaptation_seconds = 0.0;  // applying the reports to the adapter and publishing lambda
+  std::vector<mcmc::AdaptationUpdateRecord> record;   // RamltOptions::keep_record (screen level)
 };
 
 RamltStats run_ramlt(const World& world, const RenderSettings& settings, Film& film, const RamltOptions& options = {});
 
 // The numeric options by name (`tb render --param NAME=VALUE`, RenderSettings::params): "grid"
-// (N_top), "refine_every" (M_refine), "split_threshold" (M_split), "lambda0", "target_acceptance"
+// (N_top), "grid_bottom" (N_bottom), "refine_every" (M_refine), "split_threshold" (M_split), "lambda0", "target_acceptance"
 // (a*), "batch_steps"; names not listed are left to the caller's check (validate_params).
 RamltOptions apply_ramlt_params(RamltOptions o, const std::map<std::string, double>& params);
 // (name, description with its default) of each of them.

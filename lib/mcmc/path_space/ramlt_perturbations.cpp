@@ -1,5 +1,6 @@
 #include "lib/mcmc/path_space/ramlt_perturbations.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -58,6 +59,46 @@ int ScreenPartition::region_of(const MltPath& x) const {
 }
 
 double RegionalScale::sigma_of_region(int r) const { return std::exp(0.5 * (*lambda)[static_cast<size_t>(r)]); }
+double RegionalScale::sigma2_of_region(int r) const { return std::exp(0.5 * (*lambda2)[static_cast<size_t>(r)]); }
+
+std::array<double, 2> cylindrical(const Vec3& w) {
+  double phi = std::atan2(w.y, w.x);
+  if (phi < 0.0) phi += 2.0 * kPi;
+  return {std::clamp(0.5 * (w.z + 1.0), 0.0, 1.0), phi / (2.0 * kPi)};
+}
+
+int first_non_specular(const MltPath& x) {
+  const int k = x.segments();
+  if (k < 2) return -1;
+  int j = k - 1;
+  while (j >= 1 && is_dirac_surface(x.v[j])) --j;
+  return j >= 1 && !is_dirac_surface(x.v[j]) ? j : -1;
+}
+
+Screen4dPartition::Screen4dPartition(const PathContext& ctx, std::shared_ptr<const DirectionCellPartition> cells)
+    : ctx_(&ctx), cells_(std::move(cells)) {}
+
+std::shared_ptr<const Screen4dPartition> Screen4dPartition::make(const PathContext& ctx, const std::string& name,
+                                                                 int n_top, int n_bottom) {
+  mcmc::PartitionBox<4> box{{0.0, 0.0, 0.0, 0.0}, {1.0, 1.0, 1.0, 1.0}, {n_top, n_top, n_bottom, n_bottom}};
+  return std::make_shared<const Screen4dPartition>(ctx, mcmc::make_partition<4>(name, box));
+}
+
+std::array<double, 4> Screen4dPartition::canonical(const MltPath& x) const {
+  std::array<double, 4> c{0.0, 0.0, 0.0, 0.0};
+  if (const auto r = path_raster(*ctx_, x)) {
+    const Camera& cam = ctx_->world->camera();
+    c[0] = r->x / cam.width();
+    c[1] = r->y / cam.height();
+  }
+  const int j = first_non_specular(x);
+  if (j >= 1) {
+    const auto cy = cylindrical(direction(x.v[j], x.v[j - 1]));
+    c[2] = cy[0];
+    c[3] = cy[1];
+  }
+  return c;
+}
 
 RegionalScale RegionalScale::uniform(std::shared_ptr<const ScreenPartition> p, double lambda0) {
   const int n = p->regions();
@@ -130,17 +171,18 @@ std::optional<MltPath> RamltMultiChainPerturbation::propose(const MltPath& x, Un
   for (auto& v : ul) v = u.next2();
   const std::vector<int> lv = multi_.levels(x);
   if (lv.empty()) return std::nullopt;
-  const double sigma = scale_.sigma(x);
+  const double sigma = scale_.sigma(x), sigma2 = scale_.sigma2(x);  // sigma_1, sigma_2 (Otsu Sec. 5.2)
   const Vec3 primary = TruncatedNormalDirection::sample(RamltLensPerturbation::primary_direction(x), up, sigma);
   // Level m perturbs the direction at the NEW vertex y_{jm} around x's direction there (as
   // multi_chain_perturbation.cpp): known before tracing, since the frame is that of x.
   std::vector<Vec3> dirs;
   for (size_t m = 0; m + 1 < lv.size(); ++m)
-    dirs.push_back(TruncatedNormalDirection::sample(apex_direction(x, lv[m]), ul[m], sigma));
+    dirs.push_back(TruncatedNormalDirection::sample(apex_direction(x, lv[m]), ul[m], sigma2));
   return perturb(x, primary, dirs);
 }
 
-double RamltMultiChainPerturbation::density_with(const MltPath& x, const MltPath& y, double sigma) const {
+double RamltMultiChainPerturbation::density_with(const MltPath& x, const MltPath& y, double sigma,
+                                                 double sigma2) const {
   const int k = x.segments();
   if (y.segments() != k) return 0.0;
   const std::vector<int> lx = multi_.levels(x), ly = multi_.levels(y);
@@ -159,7 +201,7 @@ double RamltMultiChainPerturbation::density_with(const MltPath& x, const MltPath
     }
     const Vec3 wx = apex_direction(x, i), wy = apex_direction(y, i);
     const Vec3 o = spawn_ray(y.v[i].hit, direction(y.v[i], y.v[i - 1])).o;
-    t *= solid_angle_to_area(TruncatedNormalDirection::density(TruncatedNormalDirection::angle(wx, wy), sigma), o,
+    t *= solid_angle_to_area(TruncatedNormalDirection::density(TruncatedNormalDirection::angle(wx, wy), sigma2), o,
                              y.v[i - 1].hit.p, y.v[i - 1].geometric_normal());
   }
   return t;
