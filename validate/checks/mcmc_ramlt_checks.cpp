@@ -28,6 +28,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <type_traits>
 #include <utility>
 #include <memory>
 #include <string>
@@ -53,6 +54,7 @@
 #include "validate/render/broken_ramlt.h"
 #include "validate/render/pixel_groups.h"
 #include "validate/render/render_compare.h"
+#include "validate/stats/tests.h"
 #include "validate/mcmc/path_space/scene_cache.h"
 
 namespace tb {
@@ -85,20 +87,53 @@ RegionalScale frozen_scale(const PathContext& ctx, int n) {
   return {std::move(p), std::make_shared<const std::vector<double>>(std::move(lambda))};
 }
 
-enum class Fault { kNone, kDestinationScale };
+// The 4d partition (Otsu Sec. 5.4, Eq. 7; Sec. 6.3) of the multi-chain perturbation, frozen:
+// sigma_1 on an n x n screen grid as frozen_scale, sigma_2 per 4d region lambda2_k = -10 + 4
+// frac(0.618 k + 0.7), so that lambda_1 != lambda_2 in general. "grid4d": n_bottom x n_bottom
+// direction cells; "quadtree4d": every cell's direction quadtree split non-uniformly (root, then
+// its first child twice: 10 leaves of three sizes).
+RegionalScale frozen_scale_4d(const PathContext& ctx, const std::string& name, int n, int n_bottom) {
+  RegionalScale s = frozen_scale(ctx, n);
+  std::shared_ptr<const Screen4dPartition> p2;
+  if (name == "quadtree4d") {
+    auto t = std::make_shared<mcmc::GridQuadtreePartition>(std::array<double, 4>{0.0, 0.0, 0.0, 0.0},
+                                                           std::array<double, 4>{1.0, 1.0, 1.0, 1.0}, n);
+    for (int l = 0; l < t->cells(); ++l) {
+      t->split(l);
+      t->split(l);
+      t->split(l);
+    }
+    p2 = std::make_shared<const Screen4dPartition>(ctx, t);
+  } else {
+    p2 = Screen4dPartition::make(ctx, name, n, n_bottom);
+  }
+  std::vector<double> lambda2(static_cast<size_t>(p2->regions()));
+  for (size_t k = 0; k < lambda2.size(); ++k) {
+    const double f = 0.618034 * static_cast<double>(k) + 0.7;
+    lambda2[k] = -10.0 + 4.0 * (f - std::floor(f));
+  }
+  s.partition2 = p2;
+  s.lambda2 = std::make_shared<const std::vector<double>>(std::move(lambda2));
+  return s;
+}
+
+enum class Fault { kNone, kDestinationScale, kWithoutSigma2 };
 
 // Pairwise balance of one regional adaptive perturbation (alone), flux from the unbroken density.
 // The check is valid only when >= 20% of the pairs with pi(y) > 0 cross a region boundary: the
 // positive check passes when it is valid and balanced, the negative control when it is valid and
 // NOT balanced (a control that is not exercised is not caught).
+// With a 4d partition (scale.partition2) a pair crosses when x and y lie in different 4d regions.
 template <class P>
 CheckResult ramlt_pairwise(Fault fault, const CheckContext& cx, const std::string& name, const std::string& file,
-                           int grid, int max_tries) {
+                           int grid, int max_tries, const std::string& partition4d = "") {
   const SceneCtx& sc = scene(file);
-  const RegionalScale scale = frozen_scale(sc.ctx, grid);
+  const RegionalScale scale = partition4d.empty() ? frozen_scale(sc.ctx, grid) : frozen_scale_4d(sc.ctx, partition4d, grid, 50);
   const auto correct = std::make_shared<const RamltMutation<P>>(name, 1.0, P(sc.ctx, scale));
   std::shared_ptr<const PathMutation> m = correct;
   if (fault == Fault::kDestinationScale) m = std::make_shared<const RamltDestinationScale<P>>(correct);
+  if constexpr (std::is_same_v<P, RamltMultiChainPerturbation>)
+    if (fault == Fault::kWithoutSigma2) m = std::make_shared<const RamltMultiChainWithoutSigma2>(correct);
   const PathMutation& mut = *m;
   const std::function<MltPath(Uniforms&)> start = [&sc, &mut](Uniforms& u) {
     MltPath any;
@@ -126,7 +161,7 @@ CheckResult ramlt_pairwise(Fault fault, const CheckContext& cx, const std::strin
     const auto mv = k.sample_move(x, u);
     if (!mv || !(k.target_density(mv->y) > 0.0)) return;
     live[i] = 1;
-    cross[i] = scale.region(x) != scale.region(mv->y);
+    cross[i] = scale.partition2 ? scale.region2(x) != scale.region2(mv->y) : scale.region(x) != scale.region(mv->y);
   });
   int64_t n_cross = 0, n_live = 0;
   for (size_t i = 0; i < cross.size(); ++i) {
@@ -136,8 +171,9 @@ CheckResult ramlt_pairwise(Fault fault, const CheckContext& cx, const std::strin
   const double frac = n_live > 0 ? static_cast<double>(n_cross) / static_cast<double>(n_live) : 0.0;
   res.details["pairs_across_regions"] = n_cross;
   res.details["fraction_across_regions"] = frac;
-  res.message = fmt::format("{}, {} x {} grid: {}; {} of {} proposed pairs with pi(y) > 0 cross a region boundary "
-                            "({:.0f}%)", file, grid, grid, res.message, n_cross, n_live, 100.0 * frac);
+  res.message = fmt::format("{}, {} x {} grid{}: {}; {} of {} proposed pairs with pi(y) > 0 cross a region boundary "
+                            "({:.0f}%)", file, grid, grid, partition4d.empty() ? "" : " x direction (" + partition4d + ")",
+                            res.message, n_cross, n_live, 100.0 * frac);
   const bool exercised = frac >= 0.2;
   res.details["exercised"] = exercised;
   if (!exercised) res.message += " (< 20%: the check does not exercise region boundaries, NOT VALID)";
@@ -158,6 +194,21 @@ CheckResult lens_pairwise(Fault f, const CheckContext& cx, const std::string& n)
 // misses the specular object: up to 64 redraws per pair.
 CheckResult multichain_pairwise(Fault f, const CheckContext& cx, const std::string& n) {
   return ramlt_pairwise<RamltMultiChainPerturbation>(f, cx, n, "caustic.json", 64, 64);
+}
+
+// The multi-chain perturbation on the 4d partitions (sigma_1 per screen cell, sigma_2 per 4d
+// region): grid4d and quadtree4d, both must pass. The negative controls run on grid4d.
+CheckResult multichain_4d_pairwise(Fault f, const CheckContext& cx, const std::string& n) {
+  if (f != Fault::kNone) return ramlt_pairwise<RamltMultiChainPerturbation>(f, cx, n, "caustic.json", 64, 64, "grid4d");
+  CheckResult a = ramlt_pairwise<RamltMultiChainPerturbation>(f, cx, n, "caustic.json", 64, 64, "grid4d");
+  const CheckResult b = ramlt_pairwise<RamltMultiChainPerturbation>(f, cx, n + ".quadtree4d", "caustic.json", 64, 64,
+                                                                    "quadtree4d");
+  a.passed = a.passed && b.passed;
+  a.samples += b.samples;
+  a.statistic = std::max(a.statistic, b.statistic);
+  a.details["quadtree4d"] = b.details;
+  a.message = a.message + " | " + b.message;
+  return a;
 }
 
 // ---- the direction kernel against its stated density ----------------------------------------------
@@ -375,6 +426,164 @@ CheckResult grouped_image_check(const RamltOptions& opt, const CheckContext& cx,
   return res;
 }
 
+// ---- adaptation in the renderer: median acceptance at a*, diminishing steps, initial lambda ------
+// One adapting run of run_ramlt (ramlt-lens, Sec. 8.1 adaptation defaults) on the Cornell box at
+// max depth 3, `chains` x `per_chain` mutations, with the screen-level record kept.
+RamltStats adapting_run(RamltOptions o, const std::string& name, uint64_t seed, int res, int64_t chains,
+                        int64_t per_chain) {
+  const std::unique_ptr<World> world = load_scene_at_resolution("cornell-box.json", res, res);
+  Film film(res, res);
+  RenderSettings st;
+  st.passes = chains;
+  st.spp = std::max<int64_t>(1, chains * per_chain / (static_cast<int64_t>(res) * res));
+  st.max_depth = 3;
+  st.seed = hash_values(seed, hash_string(name));
+  o.keep_record = true;
+  return run_ramlt(*world, st, film, o);
+}
+
+// Otsu Eq. 5 moves lambda_k by gamma sgn(a_hat_k - a*): at equilibrium as many batches lie above a*
+// as below, i.e. the MEDIAN of the batch acceptance a_hat_k (Eq. 4, L = 10 reports) is a* (its
+// mean need not be). Per region with >= 400 batches, over the second half of its batches: exact
+// two-sided binomial sign test of #(a_hat > a*) among the batches != a* against 1/2, Šidák over
+// the tested regions at alpha 1e-5; and diminishing adaptation (Eq. 6): every |lambda_j -
+// lambda_{j-1}| over the last 10% of the region's updates <= 0.25 (gamma_j = 5 j^-1/2 <= 0.25 for
+// j >= 400; tested in regions with >= 450 updates). At least min(8, regions) regions must be
+// tested. Cornell box 16 x 16, 4 x 4 grid, 32 chains x 16384 mutations (full: 64 x 32768).
+CheckResult adaptation_target_check(RamltOptions o, const CheckContext& cx, const std::string& name) {
+  if (o.partition == "grid") o.grid = 4;
+  const RamltStats s = adapting_run(o, name, cx.seed, 16, cx.size(32, 64), cx.size(16384, 32768));
+  const double a_star = o.adaptation.target_acceptance;
+  std::map<int, std::vector<const mcmc::AdaptationUpdateRecord*>> by_region;
+  for (const auto& r : s.record) by_region[r.region].push_back(&r);
+  int tested = 0, tested_steps = 0;
+  double min_p = 1.0, max_late_step = 0.0, mean_sum = 0.0, median_sum = 0.0;
+  std::string worst;
+  int64_t batches = 0;
+  std::vector<double> ps;
+  for (const auto& [region, rec] : by_region) {
+    const size_t n = rec.size();
+    if (n < 400) continue;
+    int64_t above = 0, decided = 0;
+    std::vector<double> late;
+    for (size_t i = n / 2; i < n; ++i) {
+      const double a = rec[i]->a_hat;
+      late.push_back(a);
+      if (a == a_star) continue;
+      ++decided;
+      above += a > a_star;
+    }
+    batches += static_cast<int64_t>(late.size());
+    const double p = stats::binomial_test(above, decided, 0.5).p_value;
+    ps.push_back(p);
+    std::sort(late.begin(), late.end());
+    const double median = late[late.size() / 2];
+    double mean = 0.0;
+    for (double a : late) mean += a;
+    mean /= static_cast<double>(late.size());
+    mean_sum += mean;
+    median_sum += median;
+    if (p < min_p) {
+      min_p = p;
+      worst = fmt::format("region {}: {} of {} above a*, median {:.3f}, mean {:.3f}", region, above, decided, median, mean);
+    }
+    ++tested;
+    // Diminishing steps over the last 10% of the updates (records with j > 0 are updates).
+    if (rec.back()->j >= 450) {
+      ++tested_steps;
+      for (size_t i = std::max<size_t>(1, n - n / 10); i < n; ++i)
+        max_late_step = std::max(max_late_step, std::abs(rec[i]->lambda - rec[i - 1]->lambda));
+    }
+  }
+  const int need = std::min(8, s.maps.regions);
+  const double alpha_each = tested > 0 ? 1.0 - std::pow(1.0 - kAlpha, 1.0 / tested) : kAlpha;
+  CheckResult res;
+  res.statistic_name = "min p (sign test)";
+  res.statistic = min_p;
+  res.p_value = tested > 0 ? std::min(1.0, 1.0 - std::pow(1.0 - min_p, tested)) : 0.0;
+  res.alpha = kAlpha;
+  res.samples = batches;
+  const bool sign_ok = tested >= need && min_p >= alpha_each;
+  const bool steps_ok = tested_steps == 0 || max_late_step <= 0.25;
+  res.passed = sign_ok && steps_ok && tested_steps >= (s.maps.regions > 1 || o.partition != "fixed" ? need : 0);
+  res.message = fmt::format(
+      "{} ({} regions, {} mutations): {} regions with >= 400 batches, sign test of the batch acceptance against a* = "
+      "{}: min p {:.3g} (Šidák alpha each {:.2g}; {}); mean over regions of the late median {:.3f}, of the late mean "
+      "{:.3f}; {} regions with >= 450 updates, max |delta lambda| over their last 10% of updates {:.3f} (bound 0.25)",
+      o.partition, s.maps.regions, s.mlt.mutations_total, tested, a_star, min_p, alpha_each, worst,
+      tested > 0 ? median_sum / tested : 0.0, tested > 0 ? mean_sum / tested : 0.0, tested_steps, max_late_step);
+  if (tested < need) res.message += fmt::format(" (fewer than {} regions tested: NOT VALID)", need);
+  res.details["regions_tested"] = tested;
+  res.details["regions_tested_steps"] = tested_steps;
+  res.details["max_late_step"] = max_late_step;
+  res.details["min_p"] = min_p;
+  res.details["late_median_mean"] = tested > 0 ? median_sum / tested : 0.0;
+  res.details["late_mean_mean"] = tested > 0 ? mean_sum / tested : 0.0;
+  return res;
+}
+
+// Initial-lambda insensitivity: lambda0 in {-10, -5, 0, 1, 5} (each its own seed) end at the same
+// per-region lambda. Reference: S = 4 further runs at lambda0 = 1 (other seeds) give per region
+// the mean m_r and a pooled standard deviation s (over regions, S - 1 dof each); every final
+// lambda_r(lambda0) must lie within m_r +- 5 s sqrt(1 + 1 / S) (five standard deviations of a
+// new run's deviation from the seed mean). Cornell box 8 x 8, 2 x 2 grid, 16 chains x 4096
+// mutations (full: 32 x 8192); about 800 updates per region.
+CheckResult initial_lambda_check(RamltOptions o, const CheckContext& cx, const std::string& name) {
+  o.grid = 2;
+  const int64_t chains = cx.size(16, 32), per_chain = cx.size(4096, 8192);
+  constexpr int kSeeds = 4;
+  const std::vector<double> starts{-10.0, -5.0, 0.0, 1.0, 5.0};
+  std::vector<std::vector<double>> ref(kSeeds), runs(starts.size());
+  parallel_for(kSeeds + starts.size(), [&](size_t i) {
+    RamltOptions oi = o;
+    if (i < kSeeds) {
+      oi.adaptation.lambda0 = 1.0;
+      ref[i] = adapting_run(oi, name + ".seed", hash_values(cx.seed, i), 8, chains, per_chain).maps.lambda;
+    } else {
+      oi.adaptation.lambda0 = starts[i - kSeeds];
+      runs[i - kSeeds] = adapting_run(oi, name, hash_values(cx.seed, i), 8, chains, per_chain).maps.lambda;
+    }
+  });
+  const size_t R = ref[0].size();
+  std::vector<double> m(R, 0.0);
+  double ss = 0.0;
+  for (size_t r = 0; r < R; ++r) {
+    for (const auto& l : ref) m[r] += l[r] / kSeeds;
+    for (const auto& l : ref) ss += (l[r] - m[r]) * (l[r] - m[r]);
+  }
+  const double sd = std::sqrt(ss / static_cast<double>(R * (kSeeds - 1)));
+  const double tol = 5.0 * sd * std::sqrt(1.0 + 1.0 / kSeeds);
+  double worst = 0.0;
+  std::string worst_at, finals;
+  for (size_t i = 0; i < starts.size(); ++i) {
+    finals += fmt::format("{}lambda0 {}: [", i ? "; " : "", starts[i]);
+    for (size_t r = 0; r < R; ++r) {
+      const double d = std::abs(runs[i][r] - m[r]);
+      finals += fmt::format("{}{:.2f}", r ? ", " : "", runs[i][r]);
+      if (d > worst) {
+        worst = d;
+        worst_at = fmt::format("lambda0 {}, region {}", starts[i], r);
+      }
+    }
+    finals += "]";
+  }
+  std::string means;
+  for (size_t r = 0; r < R; ++r) means += fmt::format("{}{:.2f}", r ? ", " : "", m[r]);
+  CheckResult res;
+  res.passed = R > 1 && worst <= tol && sd > 0.0;
+  res.statistic_name = "max |lambda_r(lambda0) - m_r|";
+  res.statistic = worst;
+  res.samples = static_cast<int64_t>(kSeeds + starts.size()) * chains * per_chain;
+  res.message = fmt::format(
+      "{} regions; seed mean m_r [{}] over {} seeds, pooled sd {:.3f}, tolerance 5 sd sqrt(1 + 1/{}) = {:.3f}; final "
+      "lambda {}; max deviation {:.3f} ({})",
+      R, means, kSeeds, sd, kSeeds, tol, finals, worst, worst_at);
+  res.details["tolerance"] = tol;
+  res.details["pooled_sd"] = sd;
+  res.details["max_deviation"] = worst;
+  return res;
+}
+
 void add(const std::string& name, const std::string& desc, CheckKind kind,
          std::function<CheckResult(const CheckContext&, const std::string&)> f) {
   Registry::global().add(
@@ -392,6 +601,54 @@ const bool registered = [] {
       "paths D S+ D ..., >= 20% of them across region boundaries",
       CheckKind::kDeterministic,
       [](const CheckContext& cx, const std::string& n) { return multichain_pairwise(Fault::kNone, cx, n); });
+  add(p + "multichain_4d.pairwise",
+      "Regional adaptive multi-chain perturbation on the 4d partitions grid4d and quadtree4d (Otsu Sec. 5.4, Eq. 7, "
+      "Sec. 6.3) at frozen lambda_1 (screen cell) != lambda_2 (4d region): pi T a symmetric to 1e-9 on caustic paths, "
+      ">= 20% of them across 4d region boundaries",
+      CheckKind::kDeterministic,
+      [](const CheckContext& cx, const std::string& n) { return multichain_4d_pairwise(Fault::kNone, cx, n); });
+  add(p + "negative_control.multichain_4d_destination_scale.pairwise",
+      "Negative control: the 4d pairwise check must reject the multi-chain reverse density evaluated with the regions "
+      "of x instead of y",
+      CheckKind::kDeterministic,
+      [](const CheckContext& cx, const std::string& n) { return multichain_4d_pairwise(Fault::kDestinationScale, cx, n); });
+  add(p + "negative_control.multichain_4d_without_sigma2.pairwise",
+      "Negative control: the 4d pairwise check must reject the multi-chain density stated with sigma_1 for the "
+      "continued levels that the proposal draws at sigma_2",
+      CheckKind::kDeterministic,
+      [](const CheckContext& cx, const std::string& n) { return multichain_4d_pairwise(Fault::kWithoutSigma2, cx, n); });
+  add(p + "render.adaptation_target",
+      "run_ramlt (ramlt-lens, 4 x 4 grid, Otsu Sec. 8.1 adaptation) on the Cornell box: per region, exact sign test "
+      "of the batch acceptance (Eq. 4) against a* (Eq. 5 drives its median to a*; Šidák, alpha 1e-5) and "
+      "diminishing steps, |delta lambda| <= 0.25 over the last 10% of the updates (Eq. 6)",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) { return adaptation_target_check({}, cx, n); });
+  add(p + "negative_control.constant_gamma.adaptation_target",
+      "Negative control: the adaptation-target check must reject a constant step gamma = 1 (gamma_scale -> infinity, "
+      "no diminishing adaptation)",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) {
+        RamltOptions o;
+        o.adaptation.gamma_scale = 1e12;
+        return negate(adaptation_target_check(o, cx, n));
+      });
+  add(p + "negative_control.fixed_partition.adaptation_target",
+      "Negative control: the adaptation-target check must reject the FIXED partition (lambda = 1 never adapted: the "
+      "batch acceptance is far from a*)",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) {
+        RamltOptions o;
+        o.partition = "fixed";
+        return negate(adaptation_target_check(o, cx, n));
+      });
+  add(p + "render.initial_lambda",
+      "run_ramlt (ramlt-lens, 2 x 2 grid) from lambda0 = -10, -5, 0, 1, 5: the final lambda of every region within "
+      "5 pooled standard deviations (over 4 seeds at lambda0 = 1) of the seed mean",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) { return initial_lambda_check({}, cx, n); });
+  add(p + "negative_control.frozen_adapter.initial_lambda",
+      "Negative control: the initial-lambda check must reject a frozen adapter (gamma_max = 0: lambda stays lambda0)",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) {
+        RamltOptions o;
+        o.adaptation.gamma_max = 0.0;
+        return negate(initial_lambda_check(o, cx, n));
+      });
   add(p + "direction.chi2",
       "Truncated-normal direction kernel (Otsu Sec. 3) against its stated density in (theta, phi), sigma = 0.02, 0.3, "
       "2.5, and the ramlt-lens proposal's realised primary direction at its region's sigma (chi-square, alpha 1e-5, "
