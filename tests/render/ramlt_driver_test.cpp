@@ -234,5 +234,72 @@ TEST(RamltDriver, FixedPartitionDoesNotAdapt) {
   EXPECT_GT(s.maps.visits[0], 0);
 }
 
+TEST(RamltPartition4d, GridQuadtreeSplitsOneCellsTree) {
+  mcmc::GridQuadtreePartition p({0, 0, 0, 0}, {1, 1, 1, 1}, 2);
+  ASSERT_EQ(p.regions(), 4);  // one root per screen cell
+  EXPECT_EQ(p.region_of({0.7, 0.2, 0.9, 0.9}), 1);
+  EXPECT_EQ(p.region_of({0.2, 0.7, 0.1, 0.1}), 2);
+  EXPECT_EQ(p.split(1), 4);  // cell 1's root: 1 keeps the lower-left quadrant, 4..6 appended
+  ASSERT_EQ(p.regions(), 7);
+  EXPECT_EQ(p.region_of({0.7, 0.2, 0.1, 0.1}), 1);
+  EXPECT_EQ(p.region_of({0.7, 0.2, 0.9, 0.1}), 4);
+  EXPECT_EQ(p.region_of({0.7, 0.2, 0.1, 0.9}), 5);
+  EXPECT_EQ(p.region_of({0.7, 0.2, 0.9, 0.9}), 6);
+  EXPECT_EQ(p.region_of({0.2, 0.2, 0.9, 0.9}), 0);  // other cells untouched
+  for (int r = 4; r < 7; ++r) EXPECT_EQ(p.cell_of(r), 1);
+  const auto g = mcmc::make_partition<4>("grid4d", {{0, 0, 0, 0}, {1, 1, 1, 1}, {2, 2, 3, 3}});
+  EXPECT_EQ(g->regions(), 36);
+  EXPECT_EQ(g->name(), "grid4d");
+  // Dimension 0 fastest: the screen cell is the index modulo 4.
+  EXPECT_EQ(g->region_of({0.7, 0.7, 0.5, 0.9}) % 4, 3);
+}
+
+TEST(RamltPartition4d, CylindricalIsInTheUnitSquare) {
+  for (const Vec3 w : {Vec3(0, 0, 1), Vec3(0, 0, -1), Vec3(1, 0, 0), Vec3(-1, 1e-12, 0), Vec3(0, -1, 0)}) {
+    const auto c = cylindrical(w);
+    EXPECT_GE(c[0], 0.0);
+    EXPECT_LE(c[0], 1.0);
+    EXPECT_GE(c[1], 0.0);
+    EXPECT_LT(c[1], 1.0);
+  }
+  EXPECT_DOUBLE_EQ(cylindrical(Vec3(0, 0, 1))[0], 1.0);
+  EXPECT_DOUBLE_EQ(cylindrical(Vec3(0, -1, 0))[1], 0.75);
+}
+
+TEST(RamltDriver, Quadtree4dRefinesAndStaysBitIdentical) {
+  setenv("TB_SCENES_DIR", TB_SOURCE_DIR "/scenes", 0);
+  const auto world = load_scene_at_resolution("caustic.json", 8, 8);
+  RamltOptions o;
+  o.perturbation = RamltPerturbation::kMultiChain;
+  o.partition = "quadtree4d";
+  o.grid = 2;
+  o.refine_every = 2048;
+  o.split_threshold = 20;
+  RenderSettings st;
+  st.passes = 8;
+  st.spp = 8 * 64;
+  st.max_depth = 6;
+  st.seed = 3;
+  Film f1(8, 8), f2(8, 8);
+  RamltStats s1, s2;
+  {
+    const ThreadLimit one(1);
+    s1 = run_ramlt(*world, st, f1, o);
+  }
+  {
+    const ThreadLimit two(2);
+    s2 = run_ramlt(*world, st, f2, o);
+  }
+  EXPECT_EQ(s1.maps.regions, 4);   // sigma_1: the 2 x 2 screen grid
+  EXPECT_GT(s1.maps.regions2, 4);  // sigma_2: the direction quadtrees were refined
+  EXPECT_GT(s1.maps.refinements, 0);
+  EXPECT_EQ(s1.maps.lambda, s2.maps.lambda);
+  EXPECT_EQ(s1.maps.lambda2, s2.maps.lambda2);
+  const auto a = f1.mean_image(), b = f2.mean_image();
+  for (size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i], b[i]) << i;
+  o.perturbation = RamltPerturbation::kLens;  // the 4d partitions are the multi-chain perturbation's
+  EXPECT_THROW(run_ramlt(*world, st, f1, o), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace tb::path_space
