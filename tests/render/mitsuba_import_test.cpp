@@ -82,10 +82,13 @@ void expect_same_world(const World& m, const World& j) {
     ASSERT_EQ(sm.bsdf == nullptr, sj.bsdf == nullptr) << name;
     if (sj.bsdf) expect_same_bsdf(*sm.bsdf, *sj.bsdf, name);
     ASSERT_EQ(sm.emitter == nullptr, sj.emitter == nullptr) << name;
-    // Area from the density of uniform area sampling (meshes and analytic shapes alike).
+    // Area from the density of uniform area sampling. A mesh's area is summed in float, so
+    // between a mesh and an analytic shape (the Cornell walls and light are meshes in the JSON
+    // file and rectangles in the XML) they agree to 1e-7 only.
     const double am = 1.0 / m.geometry().sample_area(i, Vec2(0.3, 0.6)).pdf_area;
     const double aj = 1.0 / j.geometry().sample_area(i, Vec2(0.3, 0.6)).pdf_area;
-    EXPECT_NEAR(am, aj, 1e-9 * aj) << name << " area";
+    const bool same_kind = m.geometry().is_mesh(i) == j.geometry().is_mesh(i);
+    EXPECT_NEAR(am, aj, (same_kind ? 1e-9 : 1e-7) * aj) << name << " area";
     if (sj.emitter) {
       // An emitter's power and area are summed in float for meshes (the Cornell light is one in
       // the JSON file and an analytic rectangle in the XML): 1e-6 relative there.
@@ -133,7 +136,7 @@ void expect_same_world(const World& m, const World& j) {
     expect_near(hm->p, hj->p, 1e-9, what + " point");
     expect_near(hm->ng, hj->ng, 1e-9, what + " geometric normal");
   }
-  EXPECT_GT(hits, int(rays.size()) / 2);
+  EXPECT_GT(hits, int(rays.size()) / 4);  // the Cornell box is open towards the camera
 
   EXPECT_EQ(m.integrator_defaults(), j.integrator_defaults());
 }
@@ -295,7 +298,8 @@ TEST(MitsubaImport, UnsupportedElementsAreErrorsNamingElementLineAndWhat) {
   }
   {
     const std::string t = replace_once(base, "<emitter type=\"area\">", "<emitter type=\"area\"");
-    expect_error(t, "<emitter type=\"area\"", {"XML syntax error"});
+    // pugixml stops at the '<' of the next line, inside the unterminated tag.
+    expect_error(t, "<rgb name=\"radiance\"", {"XML syntax error"});
   }
   {
     const std::string t = replace_once(base, "<shape type=\"cube\" id=\"tallBox\">", "<shape type=\"cylinder\" id=\"tallBox\">");
