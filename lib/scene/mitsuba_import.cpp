@@ -638,6 +638,9 @@ void Importer::parse_shape(pugi::xml_node n, size_t index) {
     // Mitsuba's rectangle is [-1, 1]^2 and its disk the unit disk, both in z = 0 with normal +z:
     // this project's rectangle of half size 1 and disk of radius 1 (docs/geometry.md).
     p.finish({"to_world", "flip_normals"});
+    // Mitsuba 3 rejects a rectangle whose to_world shears it (its edges must stay orthogonal).
+    if (t == "rectangle" && std::abs(dot(m.column(0), m.column(1))) > 1e-9 * norm(m.column(0)) * norm(m.column(1)))
+      fail(where, "a rectangle's transform must not shear it (Mitsuba rejects it too)");
     s["type"] = t;
     if (t == "rectangle")
       s["half_size"] = json::array({1.0, 1.0});
