@@ -185,7 +185,7 @@ int main(int argc, char** argv) {
 
   tb::RenderArgs rargs;
   auto* render = app.add_subcommand("render", "Render a scene file to OpenEXR (+ PNG preview, JSON record)");
-  render->add_option("scene", rargs.scene, "Scene file (JSON, docs/scene.md)");
+  render->add_option("scene", rargs.scene, "Scene file (JSON, or Mitsuba XML by content; docs/scene.md)");
   render->add_option("--integrator", rargs.integrator, "Integrator name (see --list)")->capture_default_str();
   render->add_option("--spp", rargs.spp, "Samples per pixel (default: the scene's, else 16); with --time, per pass (default 1, PSS MCMC: 65536 / pixels)");
   render->add_option("--passes", rargs.passes, "Welch samples per pixel (spp is split over them)")->capture_default_str();

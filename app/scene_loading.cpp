@@ -23,7 +23,7 @@ std::pair<int, int> parse_resolution(const std::string& s) {
 std::unique_ptr<World> load_scene_file(const std::string& path, const std::string& resolution) {
   if (resolution.empty()) return load_world(path);
   const auto [w, h] = parse_resolution(resolution);
-  nlohmann::json j = nlohmann::json::parse(read_file(path));
+  nlohmann::json j = scene_json_from_file(path);  // JSON, or Mitsuba XML translated
   if (!j.is_object() || !j.contains("camera") || !j["camera"].is_object())
     throw std::invalid_argument(path + ": no camera object to set the resolution of");
   j["camera"]["resolution"] = {w, h};

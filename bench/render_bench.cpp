@@ -55,7 +55,7 @@ const World& scene(const std::string& file, int resolution = 0) {
   auto& w = cache[{file, resolution}];
   if (!w) {
     const std::string path = (kScenes / file).string();
-    nlohmann::json j = nlohmann::json::parse(read_file(path));
+    nlohmann::json j = scene_json_from_file(path);  // JSON, or Mitsuba XML translated
     if (resolution > 0) j["camera"]["resolution"] = {resolution, resolution};
     w = load_world_from_string(j.dump(), path, kScenes.string());
   }

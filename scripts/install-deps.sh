@@ -5,7 +5,7 @@ set -euo pipefail
 pkgs=(cmake g++ make pkg-config
       libglm-dev libtbb-dev libboost-dev libeigen3-dev libceres-dev
       nlohmann-json3-dev libfmt-dev libcli11-dev libembree-dev libopenexr-dev libtinyobjloader-dev
-      libpng-dev libgtest-dev libgmock-dev libbenchmark-dev gnuplot-nox
+      libpng-dev libpugixml-dev libgtest-dev libgmock-dev libbenchmark-dev gnuplot-nox
       pybind11-dev python3-dev python3-numpy python3-pytest)
 missing=()
 for p in "${pkgs[@]}"; do

@@ -15,6 +15,8 @@
 #include "lib/light/infinite_lights.h"
 #include "lib/light/point_light.h"
 #include "lib/material/bsdf_registry.h"
+#include "lib/core/atomic_file.h"
+#include "lib/scene/mitsuba_import.h"
 #include "lib/scene/tungsten_import.h"
 
 namespace tb {
@@ -266,6 +268,19 @@ std::unique_ptr<World> load(std::shared_ptr<const JsonDocument> doc, const std::
   }
 }
 
+// A Mitsuba XML scene: translated (lib/scene/mitsuba_import.h), then built as any scene. The
+// import checks what it writes; an error past it (none expected) is still a MitsubaError.
+std::unique_ptr<World> load_mitsuba(const std::string& text, const std::string& file, const std::string& base_dir) {
+  const nlohmann::json converted = mitsuba_to_scene_json(text, file, base_dir);
+  try {
+    return load(JsonDocument::parse(converted.dump(1), file + " (converted from Mitsuba XML)"), base_dir);
+  } catch (const MitsubaError&) {
+    throw;
+  } catch (const JsonError& e) {
+    throw MitsubaError(e.what());
+  }
+}
+
 }  // namespace
 
 AffineTransform parse_transform(const StrictObject& o) {
@@ -314,13 +329,33 @@ AffineTransform parse_transform(const StrictObject& o) {
 }
 
 std::unique_ptr<World> load_world(const std::string& path) {
-  auto doc = JsonDocument::load(path);
-  return load(doc, std::filesystem::path(path).parent_path().string());
+  std::string text;
+  try {
+    text = read_file(path);
+  } catch (const std::exception& e) {
+    throw JsonError(e.what());
+  }
+  return load_world_from_string(text, path, std::filesystem::path(path).parent_path().string());
 }
 
 std::unique_ptr<World> load_world_from_string(const std::string& text, const std::string& name,
                                               const std::string& base_dir) {
+  if (is_mitsuba_scene(text)) return load_mitsuba(text, name, base_dir);
   return load(JsonDocument::parse(text, name), base_dir);
+}
+
+nlohmann::json scene_json_from_file(const std::string& path) {
+  std::string text;
+  try {
+    text = read_file(path);
+  } catch (const std::exception& e) {
+    throw JsonError(e.what());
+  }
+  if (is_mitsuba_scene(text)) {
+    const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+    return mitsuba_to_scene_json(text, path, parent.empty() ? "." : parent.string());
+  }
+  return JsonDocument::parse(text, path)->root;
 }
 
 }  // namespace tb

@@ -1,7 +1,8 @@
 // The JSON scene format (docs/scene.md). Strict: an unknown key, a wrong type, a missing field,
 // a non-finite number or degenerate geometry is a JsonError naming the file, the line and the
 // JSON pointer of the offending value; a missing mesh file names its path. A scene file of the
-// Tungsten renderer is recognised by its keys and imported (lib/scene/tungsten_import.h).
+// Tungsten renderer is recognised by its keys and imported (lib/scene/tungsten_import.h); a text
+// starting with '<' is a Mitsuba XML scene, imported by lib/scene/mitsuba_import.h.
 #pragma once
 
 #include <memory>
@@ -17,6 +18,10 @@ std::unique_ptr<World> load_world(const std::string& path);
 // From text; relative mesh paths resolve against base_dir.
 std::unique_ptr<World> load_world_from_string(const std::string& text, const std::string& name = "<string>",
                                               const std::string& base_dir = ".");
+
+// The document of a scene file in this project's format: the JSON as written, or the
+// translation of a Mitsuba XML file (relative mesh paths made absolute). Throws JsonError.
+nlohmann::json scene_json_from_file(const std::string& path);
 
 // {"matrix": [[...4], [...4], [...4]]} or any of {"translate": [x,y,z], "rotate": [[ax,ay,az,deg], ...],
 // "scale": s | [sx,sy,sz]}, composed as translate * rotate_n * ... * rotate_1 * scale.

@@ -78,11 +78,8 @@ std::string scenes_dir() {
 
 std::unique_ptr<World> load_scene_at_resolution(const std::string& file, int width, int height) {
   const std::filesystem::path path = std::filesystem::path(scenes_dir()) / file;
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(fmt::format("cannot open scene {}", path.string()));
-  std::stringstream ss;
-  ss << in.rdbuf();
-  nlohmann::json j = nlohmann::json::parse(ss.str());
+  if (!std::ifstream(path)) throw std::runtime_error(fmt::format("cannot open scene {}", path.string()));
+  nlohmann::json j = scene_json_from_file(path.string());  // JSON, or Mitsuba XML translated
   j.at("camera")["resolution"] = {width, height};
   return load_world_from_string(j.dump(1), path.string(), scenes_dir());
 }
