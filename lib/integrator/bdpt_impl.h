@@ -133,11 +133,11 @@ double connection_weight(const PathContext& ctx, std::span<const PathVertex> lig
   }
   if (s >= 1 && s < k) d.pL[s] = pdf_next(ctx, s >= 2 ? &X(s - 2) : nullptr, X(s - 1), X(s), TransportMode::kImportance);
   if (s >= 1 && s + 1 < k) d.pL[s + 1] = pdf_next(ctx, &X(s - 1), X(s), X(s + 1), TransportMode::kImportance);
-  if constexpr (!Terms::kMisFullDenominator) {  // one density left out of the denominator
+  if constexpr (!Terms::kMisFullDenominator) {  // one density left out of the denominator (read as 1)
     if (s >= 1)
-      d.pE[s - 1] = 0.0;
+      d.pE[s - 1] = 1.0;
     else
-      d.pL[0] = 0.0;
+      d.pL[0] = 1.0;
   }
   technique_ratios(d, s, &q);
   return mis_weight_from_ratios(q, s, MisKind::kPower);

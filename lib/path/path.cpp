@@ -174,15 +174,27 @@ void technique_ratios(const PathDensities& d, int s, std::vector<double>* q) {
   const size_t n = d.size();
   q->assign(n, 0.0);
   const size_t ss = static_cast<size_t>(s);
+  // A zero in a numerator is read as 1 only when it is the stored pseudo-density of a Dirac vertex
+  // (pE[j] generated at a Dirac x_{j+1}, pL[j] at a Dirac x_{j-1}, or pL[1] at a Dirac emitter).
+  // Any other zero is a real one: the BSDF or emitter cannot sample that step (a grazing
+  // connection, a direction outside a lobe's support), so this technique and every one beyond it,
+  // which all need the same density, cannot generate X and get q = 0. Reading it as 1 gave such
+  // techniques weight and left the weights of the possible ones summing to less than one.
+  // Denominators are densities of technique s, which sampled X; remap0 only guards Dirac zeros.
+  const auto pe_num = [&](size_t j) { return d.pE[j] != 0.0 ? d.pE[j] : (j + 1 < n && d.delta[j + 1] ? 1.0 : 0.0); };
+  const auto pl_num = [&](size_t j) { return d.pL[j] != 0.0 ? d.pL[j] : (j >= 1 && d.delta[j - 1] ? 1.0 : 0.0); };
+  // Technique s itself needs all of its densities (pE[k], the lens position, is common to all).
+  for (size_t i = 0; i + 1 < n; ++i)
+    if ((i < ss ? pl_num(i) : pe_num(i)) == 0.0) return;
   double r = 1.0;
   if (technique_valid(d, ss)) (*q)[ss] = 1.0;
   for (size_t j = ss; j-- > 0;) {  // x_j moves from the light subpath to the camera subpath
-    r *= remap0(d.pE[j]) / remap0(d.pL[j]);
+    r *= pe_num(j) / remap0(d.pL[j]);
     if (technique_valid(d, j)) (*q)[j] = r;
   }
   r = 1.0;
   for (size_t j = ss + 1; j < n; ++j) {  // x_{j-1} moves from the camera subpath to the light subpath
-    r *= remap0(d.pL[j - 1]) / remap0(d.pE[j - 1]);
+    r *= pl_num(j - 1) / remap0(d.pE[j - 1]);
     if (technique_valid(d, j)) (*q)[j] = r;
   }
 }

@@ -25,7 +25,9 @@
 //   p_{s,t}(X) = prod_{i<s} pL[i] * prod_{i>=s} pE[i]                       (Veach Eq. 10.8).
 // Densities generated at a vertex that scatters by a Dirac lobe are stored as 0 and read as 1
 // in ratios; techniques that would connect through such a vertex (or reach a Dirac emitter by
-// chance) have density 0 (Veach 1997, Sec. 10.3.5; pbrt-v3 Sec. 16.3.4). The MIS weight of
+// chance) have density 0 (Veach 1997, Sec. 10.3.5; pbrt-v3 Sec. 16.3.4). Any other zero density
+// is a real one, and every technique that needs it has density 0 (unlike pbrt-v3's remap0, which
+// reads every zero as 1). The MIS weight of
 // technique s is a heuristic of estimators/mis_heuristics.h applied to q_j = p_{j,k+1-j}(X) / p_s(X).
 // The t = 0 techniques (light subpaths hitting the lens) are never used: lenses here are not
 // scene geometry.

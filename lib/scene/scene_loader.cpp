@@ -55,7 +55,7 @@ TriangleMesh make_cube(const AffineTransform& xf) {
 
 void parse_camera(const StrictObject& c, WorldBuilder& b) {
   CameraSetup s;
-  const std::string type = c.choice("type", {"pinhole", "thin_lens"}, "pinhole");
+  const std::string type = c.choice("type", scene_camera_types(), "pinhole");
   s.eye = c.vec3("position");
   s.target = c.vec3("look_at");
   s.up = c.vec3("up", Vec3(0, 1, 0));
@@ -102,7 +102,7 @@ void parse_material(const StrictObject& m, WorldBuilder& b) {
 
 void parse_shape(const StrictObject& s, WorldBuilder& b, const std::string& base_dir, size_t index) {
   const std::string type =
-      s.choice("type", {"sphere", "disk", "rectangle", "cylinder", "paraboloid", "torus", "cube", "mesh", "obj"});
+      s.choice("type", scene_shape_types());
   const std::string name = s.string("name", fmt::format("{}#{}", type, index));
   const std::string material = s.string("material", "");
   const Rgb emission = s.rgb("emission", Rgb(0.0));
@@ -206,7 +206,7 @@ void parse_shape(const StrictObject& s, WorldBuilder& b, const std::string& base
 }
 
 void parse_light(const StrictObject& l, WorldBuilder& b) {
-  const std::string type = l.choice("type", {"point", "spot", "directional", "environment"});
+  const std::string type = l.choice("type", scene_light_types());
   std::unique_ptr<Light> light;
   if (type == "point") {
     light = std::make_unique<PointLight>(l.vec3("position"), l.rgb("intensity", Rgb(1.0)));

@@ -7,6 +7,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "lib/core/strict_json.h"
 #include "lib/geometry/transform.h"
@@ -26,5 +27,21 @@ nlohmann::json scene_json_from_file(const std::string& path);
 // {"matrix": [[...4], [...4], [...4]]} or any of {"translate": [x,y,z], "rotate": [[ax,ay,az,deg], ...],
 // "scale": s | [sx,sy,sz]}, composed as translate * rotate_n * ... * rotate_1 * scale.
 AffineTransform parse_transform(const StrictObject& o);
+
+// The vocabulary of the format, as the parser accepts it (the feature-coverage check of the
+// shipped scenes enumerates these, so a type added here needs a checked scene that uses it).
+inline const std::vector<std::string>& scene_camera_types() {
+  static const std::vector<std::string> v = {"pinhole", "thin_lens"};
+  return v;
+}
+inline const std::vector<std::string>& scene_shape_types() {
+  static const std::vector<std::string> v = {"sphere",     "disk",  "rectangle", "cylinder", "paraboloid",
+                                             "torus",      "cube",  "mesh",      "obj"};
+  return v;
+}
+inline const std::vector<std::string>& scene_light_types() {
+  static const std::vector<std::string> v = {"point", "spot", "directional", "environment"};
+  return v;
+}
 
 }  // namespace tb

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "lib/light/infinite_lights.h"
 #include "lib/material/lambert.h"
 #include "lib/material/smooth_conductor.h"
 #include "lib/path/light_sampler.h"
@@ -53,6 +54,40 @@ TEST(MisEnumeration, MirrorPathByHand) {
   const TechniqueEnumeration e2 = enumerate_techniques(x, d);
   EXPECT_EQ(e2.can_generate, (std::vector<uint8_t>{0, 0, 0, 0, 1}));
   EXPECT_DOUBLE_EQ(e2.weight[4], 1.0);
+  // The code under test agrees: a real zero is not read as 1 (as pbrt-v3's remap0 would), so the
+  // techniques that need pE[3] get weight 0 and the one that remains gets 1, from every s.
+  for (int s = 0; s < 5; ++s) EXPECT_DOUBLE_EQ(mis_weight(d, s, MisKind::kPower), s == 4 ? 1.0 : 0.0) << s;
+}
+
+// A directional light is an infinite emitter: x_0 is its direction (the delta, pL[0] = its
+// selection probability, common to every s >= 1) and pL[1] is the real area density of x_1 on the
+// emission disk. Path: direction - diffuse - diffuse - lens; s = 0 is impossible (a direction with
+// no extent), s = 1, 2, 3 possible with p_1 = pL0 pE1 pE2, p_2 = pL0 pL1 pE2, p_3 = pL0 pL1 pL2.
+TEST(MisEnumeration, DirectionalLightFirstDensityIsReal) {
+  const DirectionalLight sun(Vec3(0, -1, 0), Rgb(1.0));
+  const LambertBsdf diffuse(Rgb(0.5));
+  std::vector<PathVertex> x(4);
+  x[0].kind = VertexKind::kLight;
+  x[0].light = &sun;
+  x[0].infinite = true;
+  x[0].delta = true;
+  x[1].bsdf = &diffuse;
+  x[2].bsdf = &diffuse;
+  x[3].kind = VertexKind::kCamera;
+  PathDensities d;
+  d.pL = {0.5, 0.25, 2.0, 0.0};
+  d.pE = {0.7, 1.0, 0.5, 1.0};
+  d.delta = {1, 0, 0, 0};
+  d.x0_infinite = true;
+  const double p1 = 0.5 * 1.0 * 0.5, p2 = 0.5 * 0.25 * 0.5, p3 = 0.5 * 0.25 * 2.0;
+  const double sum = p1 * p1 + p2 * p2 + p3 * p3;
+  const TechniqueEnumeration e = enumerate_techniques(x, d);
+  EXPECT_EQ(e.can_generate, (std::vector<uint8_t>{0, 1, 1, 1}));
+  const double want[4] = {0.0, p1 * p1 / sum, p2 * p2 / sum, p3 * p3 / sum};
+  for (int s = 0; s < 4; ++s) {
+    EXPECT_NEAR(e.weight[s], want[s], 1e-15) << s;
+    EXPECT_NEAR(mis_weight(d, s, MisKind::kPower), want[s], 1e-15) << s;
+  }
 }
 
 TEST(MisEnumeration, InvariantHoldsOnDiracScenesAndControlIsCaught) {

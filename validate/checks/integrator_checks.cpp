@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 
 #include "lib/core/hash.h"
+#include "validate/checks/checked_scenes.h"
 #include "validate/registry.h"
 #include "validate/render/analytic_worlds.h"
 #include "validate/render/broken_integrators.h"
@@ -226,16 +227,15 @@ struct SceneCase {
   int64_t reference_factor;  // reference spp = factor x the tested spp
 };
 
+// The shipped scenes of validate/checks/checked_scenes.h, all at the same sizes (the smooth meshes:
+// every estimator must apply the same shading-normal convention, light subpaths the adjoint
+// correction, Veach 1997, Eq. 5.19; docs/path.md, Shading normals).
 const std::vector<SceneCase>& scene_cases() {
-  static const std::vector<SceneCase> c = {
-      {"cornell-box", "cornell-box.json", {12, 16, 8}, {32, 64, 32}, 8},
-      {"glossy", "glossy.json", {12, 16, 8}, {32, 64, 32}, 8},
-      {"caustic", "caustic.json", {12, 16, 8}, {32, 64, 32}, 8},
-      // Coarse meshes with per-vertex shading normals (an OBJ with vn, and inline "normals"):
-      // every estimator must apply the same shading-normal convention, light subpaths the
-      // adjoint correction (Veach 1997, Eq. 5.19; docs/path.md, Shading normals).
-      {"smooth-mesh", "smooth-mesh.json", {12, 16, 8}, {32, 64, 32}, 8},
-  };
+  static const std::vector<SceneCase> c = [] {
+    std::vector<SceneCase> v;
+    for (const auto& s : agreement_scenes()) v.push_back({s.key, s.file, {12, 16, 8}, {32, 64, 32}, 8});
+    return v;
+  }();
   return c;
 }
 constexpr int kSceneMaxDepth = 5;

@@ -46,6 +46,7 @@
 #include "validate/mcmc/pairwise_balance.h"
 #include "validate/mcmc/pairwise_record.h"
 #include "validate/mcmc/registered_mutations.h"
+#include "validate/checks/checked_scenes.h"
 #include "validate/registry.h"
 #include "validate/render/broken_pss.h"
 #include "validate/render/render_compare.h"
@@ -667,15 +668,17 @@ const bool registered = [] {
   }
   // Every variant on the glossy and the caustic scene too (issue: Cornell box, glossy, caustic);
   // pssmlt-pt and msmlt-mmlt on all three.
-  for (const char* scene : {"cornell", "glossy", "caustic"})
+  // and on every other scene of the agreement set (validate/checks/checked_scenes.h).
+  for (const auto& checked : agreement_scenes())
     for (auto [variant, label] : {std::pair{Variant::kPssmlt, "pssmlt"}, std::pair{Variant::kMmlt, "mmlt"},
                                   std::pair{Variant::kMsmlt, "msmlt"},
                                   std::pair{Variant::kPssmltPtRescaled, "pssmlt_pt_rescaled"},
                                   std::pair{Variant::kPssmltPt, "pssmlt_pt"},
                                   std::pair{Variant::kMsmltMmlt, "msmlt_mmlt"}}) {
       const bool new_variant = variant == Variant::kPssmltPt || variant == Variant::kMsmltMmlt;
-      if (std::string(scene) == "cornell" && !new_variant) continue;  // registered above
-      const std::string file = std::string(scene) == "cornell" ? "cornell-box.json" : std::string(scene) + ".json";
+      const std::string scene = checked.key == "cornell-box" ? "cornell" : checked.key;
+      if (scene == "cornell" && !new_variant) continue;  // registered above
+      const std::string file = checked.file;
       const std::string name = fmt::format("render.{}.{}.unbiased", label, scene);
       const Variant v = variant;
       Registry::global().add(Check{

@@ -29,8 +29,12 @@ bool emitter_has_extent(const PathVertex& x0) {
   return (f & (light_flags::kArea | light_flags::kInfinite)) != 0;
 }
 
+// A Dirac-direction emitter at a finite position: x_1 lies on its one ray, so pL[1] is a delta.
+// Not the directional light: that one is an infinite emitter, whose x_0 is the direction itself
+// (the delta is its pL[0], common to every s >= 1), and pL[1] is the genuine area density of the
+// point x_1 drawn on its emission disk.
 bool dirac_direction_emitter(const PathVertex& x0) {
-  return x0.light && (x0.light->flags() & light_flags::kDeltaDirection) != 0;
+  return x0.light && !x0.infinite && (x0.light->flags() & light_flags::kDeltaDirection) != 0;
 }
 
 }  // namespace
@@ -90,7 +94,19 @@ void MisInvariantTally::add(std::span<const PathVertex> x, const TechniqueEnumer
   ++paths;
   if (e.dirac_vertices > 0) ++paths_with_dirac;
   const auto note = [&](const std::string& what) {
-    if (first_violation.empty()) first_violation = fmt::format("{} (path of {} segments): {}", where, x.size() - 1, what);
+    if (!first_violation.empty()) return;
+    // Enough to reproduce the verdict by hand: the emitter, the vertex kinds, both weight vectors.
+    std::string kinds, wc, we;
+    for (size_t i = 0; i < x.size(); ++i) {
+      kinds += i == 0 ? "" : " ";
+      kinds += x[i].kind == VertexKind::kCamera ? "C" : x[i].kind == VertexKind::kLight ? "L" : (x[i].delta ? "S*" : "S");
+      if (x[i].bsdf) kinds += fmt::format("({})", x[i].bsdf->name());
+      wc += fmt::format("{}{:.3g}", i == 0 ? "" : " ", code[i]);
+      we += fmt::format("{}{:.3g}", i == 0 ? "" : " ", e.weight[i]);
+    }
+    first_violation = fmt::format("{} (path of {} segments, emitter {}, vertices [{}]): {}; weights [{}], enumeration [{}]",
+                                  where, x.size() - 1, x[0].light ? std::string(x[0].light->name()) : "none", kinds,
+                                  what, wc, we);
   };
   if (sampled_s < 0 || sampled_s >= static_cast<int>(e.can_generate.size()) || !e.can_generate[sampled_s]) {
     ++sampled_invalid;

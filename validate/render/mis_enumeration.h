@@ -16,9 +16,11 @@
 //    (s = 1, t = 1);
 //  - its area density p_s = prod_{i<s} pL[i] prod_{i>=s} pE[i] (Veach 1997, Eq. 10.8) must be
 //    positive, where a density generated *at* a Dirac vertex (pL[i] after a Dirac x_{i-1} or a
-//    Dirac-direction emitter, pE[i] before a Dirac x_{i+1}) is a delta common to every technique
-//    that can generate the path and counts as 1 (Veach 1997, Sec. 10.3.5), and pE[k], the lens
-//    position density, is common to all techniques and left out.
+//    Dirac-direction emitter at a finite position, pE[i] before a Dirac x_{i+1}) is a delta common
+//    to every technique that can generate the path and counts as 1 (Veach 1997, Sec. 10.3.5), and
+//    pE[k], the lens position density, is common to all techniques and left out. A directional
+//    light is an infinite emitter: x_0 is its direction, whose delta is pL[0] (common to every
+//    s >= 1), and pL[1] is the area density of x_1 drawn on its emission disk, a real density.
 // The weights: the power heuristic (beta = 2, Veach 1997, Eq. 9.11) over those techniques,
 // w_s = p_s^2 / sum_j p_j^2, in logarithms (no under- or overflow of long products).
 #pragma once
