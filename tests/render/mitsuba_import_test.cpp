@@ -23,6 +23,7 @@
 #include "lib/scene/mitsuba_import.h"
 #include "lib/scene/scene_loader.h"
 #include "validate/image_compare.h"
+#include "import_test_render.h"
 
 namespace tb {
 namespace {
@@ -252,19 +253,7 @@ TEST(MitsubaImport, TheRestOfTheSubsetIsTheSameWorldAsItsJsonEquivalent) {
                {"must not shear"});
 }
 
-WelchImage render_pt(const World& w, uint64_t seed) {
-  RenderSettings st;
-  st.seed = seed;
-  st.spp = 16 * 32;
-  st.passes = 16;
-  st.max_depth = w.integrator_defaults().at("max_depth").get<int>();
-  Film film(w.camera().width(), w.camera().height());
-  const IntegratorInfo* pt = find_integrator("pt");
-  EXPECT_NE(pt, nullptr);
-  EXPECT_EQ(pt->render(w, st, film), st.passes);
-  EXPECT_EQ(film.nonfinite().count(), 0);
-  return film.welch();
-}
+WelchImage render_pt(const World& w, uint64_t seed) { return test::render_pt_for_import_test(w, seed); }
 
 constexpr int kRes = 24;
 

@@ -19,6 +19,7 @@
 #include "lib/scene/scene_loader.h"
 #include "lib/scene/tungsten_import.h"
 #include "validate/image_compare.h"
+#include "import_test_render.h"
 
 namespace tb {
 namespace {
@@ -122,19 +123,7 @@ TEST(TungstenImport, CornellBoxIsTheSameWorldAsItsHandConversion) {
   EXPECT_EQ(t->integrator_defaults().at("spp"), 4096);
 }
 
-WelchImage render_pt(const World& w, uint64_t seed) {
-  RenderSettings st;
-  st.seed = seed;
-  st.spp = 16 * 32;
-  st.passes = 16;
-  st.max_depth = w.integrator_defaults().at("max_depth").get<int>();
-  Film film(w.camera().width(), w.camera().height());
-  const IntegratorInfo* pt = find_integrator("pt");
-  EXPECT_NE(pt, nullptr);
-  EXPECT_EQ(pt->render(w, st, film), st.passes);
-  EXPECT_EQ(film.nonfinite().count(), 0);
-  return film.welch();
-}
+WelchImage render_pt(const World& w, uint64_t seed) { return test::render_pt_for_import_test(w, seed); }
 
 TEST(TungstenImport, CornellBoxRendersTheSameImageAndAFivePercentAlbedoChangeIsRejected) {
   constexpr int kRes = 24;
