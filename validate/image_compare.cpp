@@ -38,10 +38,10 @@ double ImageCompareResult::p_value() const {
 std::string ImageCompareResult::message() const {
   return fmt::format(
       "{}: {}P={} {}-channels, mean rel. diff {:+.3g}; Stouffer Z={:.3g} (ch {}, p={:.3g}), sum z^2={:.4g} (ch {}, p={:.3g}), "
-      "worst pixel ({}, {}) ch {} t={:.3g} p={:.3g} (family p={:.3g}){}; alpha={} ({} per test)",
+      "worst {} ({}, {}) ch {} t={:.3g} p={:.3g} (family p={:.3g}){}; alpha={} ({} per test)",
       rejects() ? "different" : "consistent", tiled ? fmt::format("{}x{} tiles, ", tile, tile) : "", tested,
       tiled ? "tile" : "pixel", mean_relative_difference, stouffer.statistic, stouffer_channel,
-      stouffer.p_value, sum_z2.statistic, sum_z2_channel, sum_z2.p_value, worst.x, worst.y, worst.channel, worst.t, worst.p, p_pixel_family,
+      stouffer.p_value, sum_z2.statistic, sum_z2_channel, sum_z2.p_value, tiled ? "tile at" : "pixel", worst.x, worst.y, worst.channel, worst.t, worst.p, p_pixel_family,
       zero_variance_mismatch > 0 ? fmt::format(", {} zero-variance mismatches", zero_variance_mismatch) : "", alpha,
       alpha_each);
 }
