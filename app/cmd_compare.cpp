@@ -97,8 +97,11 @@ int compare_images(const CompareArgs& a) {
     if (r.third_moments)
       fmt::print("  predicted Stouffer shift from skewness: {:.3g} at {}x{} tiles, {:.3g} per pixel{}\n", r.predicted_shift,
                  r.tile, r.tile, r.predicted_shift_pixel,
-                 r.skew_condition_met() ? "" : "  (ABOVE the bound even for the whole image: the verdict may reflect skew, "
-                                                "not a difference of means)");
+                 r.skew_condition_met()  ? ""
+                 : r.tile_from_skewness ? "  (ABOVE the bound even for the whole image: the verdict may reflect skew, "
+                                          "not a difference of means)"
+                                        : fmt::format("  (ABOVE the bound {:g} at this k: the verdict may reflect skew; "
+                                                      "without --tile, k is chosen to meet it)", r.max_skew_shift));
   } else if (r.third_moments) {
     fmt::print("test: per-pixel Welch; predicted Stouffer shift from skewness {:.3g}{}\n", r.predicted_shift_pixel,
                r.predicted_shift_pixel > r.max_skew_shift ? fmt::format(" (above {:g}: heavy tails can reject equal "
