@@ -204,7 +204,7 @@ int main(int argc, char** argv) {
   tb::CompareArgs cmpa;
   auto* compare = app.add_subcommand(
       "compare",
-      "Compare two renders statistically (A.exr B.exr: per-pixel Welch t-test, Stouffer, sum z^2; exit 1 if they "
+      "Compare two renders statistically (A.exr B.exr: tiled or per-pixel Welch t-test, Stouffer, sum z^2; exit 1 if they "
       "differ), or integrators at equal time on a scene (SCENE --integrators A,B --time S: rRMSE against time, "
       "fitted rates, efficiency, HTML report; docs/compare.md)");
   compare->add_option("inputs", cmpa.inputs,
