@@ -79,6 +79,8 @@ def main():
             spp, reps = int(spp), int(reps)
             counts = {"tiled": 0, "pixel": 0}
             tiles, shifts_pixel, zs = [], [], {"tiled": [], "pixel": []}
+            which = {"tiled": {"pixel_or_tile": 0, "stouffer": 0, "sum_z2": 0},
+                     "pixel": {"pixel_or_tile": 0, "stouffer": 0, "sum_z2": 0}}
             for r in range(reps):
                 paths = []
                 for side, s in (("a", spp), ("b", spp * args.ratio)):
@@ -98,6 +100,11 @@ def main():
                         sys.exit(f"compare failed: {err}")
                     d = json.load(open(j))
                     counts[test] += int(d["rejects"])
+                    if d["rejects"]:  # which of the three tests rejected (each at alpha_each)
+                        which[test]["pixel_or_tile"] += int(d["zero_variance_mismatch"] > 0 or
+                                                            d["p_pixel_family"] < d["alpha_each"])
+                        which[test]["stouffer"] += int(d["stouffer_p"] < d["alpha_each"])
+                        which[test]["sum_z2"] += int(d["sum_z2_p"] < d["alpha_each"])
                     zs[test].append(d["stouffer_z"])
                     if test == "tiled":
                         tiles.append(d["tile"])
@@ -108,7 +115,7 @@ def main():
             for test in ("tiled", "pixel"):
                 lo, hi = clopper_pearson(counts[test], reps)
                 row[test] = {"rejections": counts[test], "rate": counts[test] / reps, "ci95": [lo, hi],
-                             "mean_stouffer_z": sum(zs[test]) / reps}
+                             "mean_stouffer_z": sum(zs[test]) / reps, "rejected_by": which[test]}
             row["tiles_chosen"] = sorted(set(tiles))
             row["mean_predicted_shift_pixel"] = sum(shifts_pixel) / reps
             results.append(row)
@@ -118,7 +125,7 @@ def main():
                   f"mean Z {row['tiled']['mean_stouffer_z']:+.2f}); "
                   f"pixel {counts['pixel']}/{reps} = {row['pixel']['rate']:.3f} "
                   f"[{row['pixel']['ci95'][0]:.3f}, {row['pixel']['ci95'][1]:.3f}] "
-                  f"(mean Z {row['pixel']['mean_stouffer_z']:+.2f}, predicted skew shift {row['mean_predicted_shift_pixel']:.2f}); "
+                  f"(mean Z {row['pixel']['mean_stouffer_z']:+.2f}; tiled rejections by {which['tiled']}, predicted skew shift {row['mean_predicted_shift_pixel']:.2f}); "
                   f"{time.time() - t0:.0f} s", flush=True)
     os.makedirs(os.path.dirname(args.out) or ".", exist_ok=True)
     json.dump({"command": " ".join(sys.argv), "scene": args.scene, "size": args.size, "alpha": args.alpha,
