@@ -72,15 +72,51 @@ int compare_images(const CompareArgs& a) {
                                             img_b.height));
   ImageCompareOptions opt;
   opt.skew_correction = a.skew_correction;
+  opt.test = a.test == "pixel" ? CompareTest::kPixel : CompareTest::kTiled;
+  opt.tile = a.tile;
+  if (a.skew_correction && opt.test == CompareTest::kTiled)
+    throw std::invalid_argument("--skew-correction applies to --test pixel only");
+  if (a.tile > 0 && opt.test == CompareTest::kPixel) throw std::invalid_argument("--tile applies to --test tiled only");
   const ImageCompareResult r = compare_welch_images(img_a, img_b, a.alpha, opt);
   const std::string b_name =
       reference_form ? fmt::format("reference mean {}, variance of the mean {} (effective count {})", a.reference_mean,
                                    a.reference_variance, kReferenceEffectiveCount)
                      : a.inputs[1];
   fmt::print("A: {}\nB: {}\n", a.inputs[0], b_name);
-  fmt::print("alpha {:g} (each of 3 tests {:.3g}, per pixel-channel {:.3g}); {} pixel-channels tested, {} identical "
+  const char* unit = r.tiled ? "tile-channel" : "pixel-channel";
+  if (r.tiled) {
+    fmt::print("test: tiled Welch, {0}x{0} tiles ({1}); per tile and channel t = sum(mean_a - mean_b) / sqrt(sum of "
+               "squared standard errors), Satterthwaite dof\n",
+               r.tile,
+               r.tile_from_skewness ? fmt::format("chosen from the stored third moments: smallest power of 2 with "
+                                                  "predicted |Stouffer shift| <= {:g}", r.max_skew_shift)
+               : a.tile > 0        ? std::string("given by --tile")
+                                   : fmt::format("fallback: {} has no moment3 channels, so k is not chosen from the skewness",
+                                                 img_a.has_third_moment() ? (reference_form ? std::string("B") : a.inputs[1])
+                                                                          : a.inputs[0]));
+    if (r.third_moments)
+      fmt::print("  predicted Stouffer shift from skewness: {:.3g} at {}x{} tiles, {:.3g} per pixel{}\n", r.predicted_shift,
+                 r.tile, r.tile, r.predicted_shift_pixel,
+                 r.skew_condition_met()  ? ""
+                 : r.tile_from_skewness ? "  (ABOVE the bound even for the whole image: the verdict may reflect skew, "
+                                          "not a difference of means)"
+                                        : fmt::format("  (ABOVE the bound {:g} at this k: the verdict may reflect skew; "
+                                                      "without --tile, k is chosen to meet it)", r.max_skew_shift));
+  } else if (r.third_moments) {
+    fmt::print("test: per-pixel Welch; predicted Stouffer shift from skewness {:.3g}{}\n", r.predicted_shift_pixel,
+               r.predicted_shift_pixel > r.max_skew_shift ? fmt::format(" (above {:g}: heavy tails can reject equal "
+                                                                        "means; --test tiled is valid here)",
+                                                                        r.max_skew_shift)
+                                                          : "");
+  }
+  fmt::print("  validity: Welch samples (passes) independent; pixels independent within a pass (sum of variances). "
+             "Splatting (lt, bdpt t = 1) correlates pixels within a pass positively and a PSS MLT pass shares one "
+             "normalisation over all pixels: there Var(D) is underestimated. Measured false-alarm rates of the tiled test at alpha 0.01 "
+             "(Cornell box 24x24, docs/statistics.md): pt 0.010, lt 0.005, bdpt 0.013, pssmlt 0.075 (above alpha: "
+             "read a PSS MLT verdict with that in mind)\n");
+  fmt::print("alpha {:g} (each of 3 tests {:.3g}, per {} {:.3g}); {} {}s tested, {} identical "
              "skipped\n",
-             r.alpha, r.alpha_each, r.alpha_pixel, r.tested, r.skipped_identical);
+             r.alpha, r.alpha_each, unit, r.alpha_pixel, r.tested, unit, r.skipped_identical);
   if (r.skew_corrected)
     fmt::print("  t skew-corrected (Hall's transformation, from the stored third moments): valid where |c| is small "
                "and a pixel's rare contributions were sampled; {} pixel-channels with |c| > 0.2 (max |c| {:.3g})\n",
@@ -89,7 +125,7 @@ int compare_images(const CompareArgs& a) {
     fmt::print("  t not skew-corrected: {} has no moment3 channels (written by tb render since the skew "
                "correction); heavy-tailed pixels may then reject consistent means\n",
                img_a.has_third_moment() ? b_name : a.inputs[0]);
-  fmt::print("  pixel-wise (Sidak over pixel-channels): p = {:.4g}{}\n", r.p_pixel_family,
+  fmt::print("  {}-wise (Sidak over {}s): p = {:.4g}{}\n", r.tiled ? "tile" : "pixel", unit, r.p_pixel_family,
              r.rejects_pixel() ? "  REJECTS" : "");
   static const char* kChannel[] = {"R", "G", "B"};
   auto ch = [](int c) { return c >= 0 && c < 3 ? kChannel[c] : "-"; };
@@ -99,12 +135,13 @@ int compare_images(const CompareArgs& a) {
              ch(r.sum_z2_channel), r.sum_z2.statistic, r.sum_z2.dof, r.sum_z2.p_value,
              r.rejects_sum_z2() ? "  REJECTS" : "");
   if (r.zero_variance_mismatch > 0)
-    fmt::print("  {} pixel-channels with zero variance in both images and different means\n", r.zero_variance_mismatch);
+    fmt::print("  {} {}s with zero variance in both images and different means\n", r.zero_variance_mismatch, unit);
   if (r.skipped_below_float_range > 0)
-    fmt::print("  {} pixel-channels skipped: means below 1.1e-19, whose variance a float EXR cannot hold\n",
-               r.skipped_below_float_range);
+    fmt::print("  {} {}s skipped: means below 1.1e-19, whose variance a float EXR cannot hold\n",
+               r.skipped_below_float_range, unit);
   if (r.worst.x >= 0)
-    fmt::print("  worst pixel ({}, {}) {}: A {:.6g}, B {:.6g}, t = {:.4g}, dof {:.4g}, p = {:.4g}\n", r.worst.x,
+    fmt::print("  worst {} ({}, {}) {}: A {:.6g}, B {:.6g}, t = {:.4g}, dof {:.4g}, p = {:.4g}\n",
+               r.tiled ? fmt::format("{0}x{0} tile at", r.tile) : std::string("pixel"), r.worst.x,
                r.worst.y, r.worst.channel >= 0 && r.worst.channel < 3 ? kChannel[r.worst.channel] : "?", r.worst.mean_a,
                r.worst.mean_b, r.worst.t, r.worst.dof, r.worst.p);
   fmt::print("  mean relative difference (A - B) / B: {:+.4g}\n", r.mean_relative_difference);

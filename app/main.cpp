@@ -206,7 +206,7 @@ int main(int argc, char** argv) {
   tb::CompareArgs cmpa;
   auto* compare = app.add_subcommand(
       "compare",
-      "Compare two renders statistically (A.exr B.exr: per-pixel Welch t-test, Stouffer, sum z^2; exit 1 if they "
+      "Compare two renders statistically (A.exr B.exr: tiled or per-pixel Welch t-test, Stouffer, sum z^2; exit 1 if they "
       "differ), or integrators at equal time on a scene (SCENE --integrators A,B --time S: rRMSE against time, "
       "fitted rates, efficiency, HTML report; docs/compare.md)");
   compare->add_option("inputs", cmpa.inputs,
@@ -214,7 +214,7 @@ int main(int argc, char** argv) {
                       "--reference-mean/--reference-variance, or one scene file")
       ->required()->expected(1, 2);
   const std::vector<std::string> compare_image_opts = {"--alpha", "--json", "--reference-mean", "--reference-variance",
-                                                       "--skew-correction"};
+                                                       "--skew-correction", "--test", "--tile"};
   compare->add_option("--reference-mean", cmpa.reference_mean,
                       "A.exr: the reference's mean image (.pfm or .exr), compared with A instead of B");
   compare->add_option("--reference-variance", cmpa.reference_variance,
@@ -224,6 +224,13 @@ int main(int argc, char** argv) {
   compare->add_option("--json", cmpa.json_out, "A.exr B.exr: write the full result to this JSON file");
   compare->add_flag("--skew-correction", cmpa.skew_correction,
                     "A.exr B.exr: Hall's skewness transformation of each pixel's t (experimental; docs/integrator.md)");
+  compare->add_option("--test", cmpa.test,
+                      "A.exr B.exr: tiled (default: Welch test per k x k tile, k chosen from the stored skewness so "
+                      "that heavy tails cannot shift Stouffer's Z by more than 0.25; docs/statistics.md) or pixel")
+      ->check(CLI::IsMember({"tiled", "pixel"}))
+      ->capture_default_str();
+  compare->add_option("--tile", cmpa.tile, "A.exr B.exr, --test tiled: tile size K (default: chosen from the skewness)")
+      ->check(CLI::PositiveNumber);
   tb::CompareSceneArgs& cs = cmpa.scene;
   const std::vector<std::string> compare_scene_opts = {"--integrators", "--time",  "--reference",   "--out",
                                                        "--checkpoints", "--resolution", "--seed", "--threads", "--pass-spp",

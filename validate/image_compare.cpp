@@ -37,10 +37,11 @@ double ImageCompareResult::p_value() const {
 
 std::string ImageCompareResult::message() const {
   return fmt::format(
-      "{}: P={} pixel-channels, mean rel. diff {:+.3g}; Stouffer Z={:.3g} (ch {}, p={:.3g}), sum z^2={:.4g} (ch {}, p={:.3g}), "
-      "worst pixel ({}, {}) ch {} t={:.3g} p={:.3g} (family p={:.3g}){}; alpha={} ({} per test)",
-      rejects() ? "different" : "consistent", tested, mean_relative_difference, stouffer.statistic, stouffer_channel,
-      stouffer.p_value, sum_z2.statistic, sum_z2_channel, sum_z2.p_value, worst.x, worst.y, worst.channel, worst.t, worst.p, p_pixel_family,
+      "{}: {}P={} {}-channels, mean rel. diff {:+.3g}; Stouffer Z={:.3g} (ch {}, p={:.3g}), sum z^2={:.4g} (ch {}, p={:.3g}), "
+      "worst {} ({}, {}) ch {} t={:.3g} p={:.3g} (family p={:.3g}){}; alpha={} ({} per test)",
+      rejects() ? "different" : "consistent", tiled ? fmt::format("{}x{} tiles, ", tile, tile) : "", tested,
+      tiled ? "tile" : "pixel", mean_relative_difference, stouffer.statistic, stouffer_channel,
+      stouffer.p_value, sum_z2.statistic, sum_z2_channel, sum_z2.p_value, tiled ? "tile at" : "pixel", worst.x, worst.y, worst.channel, worst.t, worst.p, p_pixel_family,
       zero_variance_mismatch > 0 ? fmt::format(", {} zero-variance mismatches", zero_variance_mismatch) : "", alpha,
       alpha_each);
 }
@@ -67,6 +68,14 @@ nlohmann::json ImageCompareResult::details() const {
           {"skew_corrected", skew_corrected},
           {"skew_large", skew_large},
           {"skew_max", skew_max},
+          {"test", tiled ? "tiled" : "pixel"},
+          {"tile", tile},
+          {"tile_from_skewness", tile_from_skewness},
+          {"third_moments", third_moments},
+          {"predicted_skew_shift", predicted_shift},
+          {"predicted_skew_shift_pixel", predicted_shift_pixel},
+          {"max_skew_shift", max_skew_shift},
+          {"skew_condition_met", skew_condition_met()},
           {"rejects", rejects()}};
 }
 
@@ -79,7 +88,6 @@ ImageCompareResult compare_welch_images(const WelchImage& a, const WelchImage& b
 }
 
 namespace {
-
 // The unbiased third cumulant of n samples from their third central moment (1/n) sum (x - m)^3.
 double k3_from_m3(double m3, int64_t n) {
   if (n < 3) return 0.0;
@@ -126,8 +134,181 @@ std::vector<Rgb> pooled_skewness(const WelchImage& w) {
 
 }  // namespace
 
+namespace {
+
+// The three global tests over the tested units (pixel-channels or tile-channels), per channel.
+void finish_global_tests(ImageCompareResult& r, const std::vector<double> (&zc)[3], double min_p, double sum_diff,
+                         double sum_b) {
+  r.tested = static_cast<int64_t>(zc[0].size() + zc[1].size() + zc[2].size());
+  r.mean_relative_difference = sum_b != 0.0 ? sum_diff / sum_b : 0.0;
+  if (r.tested > 0) {
+    r.alpha_pixel = stats::sidak_alpha(r.alpha_each, r.tested);
+    r.p_pixel_family = stats::sidak_adjust(std::min(min_p, 1.0), r.tested);
+    // The three channels of a pixel come from the same paths, so their z are correlated: the global
+    // tests run per channel and the channel with the smallest p is Šidák-adjusted over the three
+    // (valid under any dependence between channels for the min-p form, conservative here).
+    bool first = true;
+    for (int c = 0; c < 3; ++c) {
+      if (zc[c].empty()) continue;
+      const stats::TestResult st = stats::stouffer(zc[c]), sq = stats::sum_z2_test(zc[c]);
+      if (first || st.p_value < r.stouffer.p_value) {
+        r.stouffer = st;
+        r.stouffer_channel = c;
+      }
+      if (first || sq.p_value < r.sum_z2.p_value) {
+        r.sum_z2 = sq;
+        r.sum_z2_channel = c;
+      }
+      first = false;
+    }
+    r.stouffer.p_value = stats::sidak_adjust(r.stouffer.p_value, 3);
+    r.sum_z2.p_value = stats::sidak_adjust(r.sum_z2.p_value, 3);
+  }
+}
+
+// Per k x k tile (edge tiles smaller) and channel, the sums the tiled Welch test needs.
+struct TileSums {
+  Rgb d{0.0};        // sum (mean_a - mean_b)
+  Rgb v{0.0};        // Var(D) = sum (s_a^2 / n_a + s_b^2 / n_b)
+  Rgb dof_den{0.0};  // Satterthwaite: sum ((s_a^2 / n_a)^2 / (n_a - 1) + (s_b^2 / n_b)^2 / (n_b - 1))
+  Rgb k3{0.0};       // kappa3(D) = sum (k3_a / n_a^2 - k3_b / n_b^2)
+  Rgb max_abs_mean{0.0};
+  Rgb sum_b{0.0};
+  int x0 = 0, y0 = 0;
+};
+
+std::vector<TileSums> tile_sums(const WelchImage& a, const WelchImage& b, int k) {
+  const int tx = (a.width + k - 1) / k, ty = (a.height + k - 1) / k;
+  std::vector<TileSums> t(size_t(tx) * size_t(ty));
+  for (int j = 0; j < ty; ++j)
+    for (int i = 0; i < tx; ++i) t[size_t(j) * size_t(tx) + size_t(i)].x0 = i * k, t[size_t(j) * size_t(tx) + size_t(i)].y0 = j * k;
+  const bool third = a.has_third_moment() && b.has_third_moment();
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) {
+      const size_t p = size_t(y) * size_t(a.width) + size_t(x);
+      const int64_t na = a.count[p], nb = b.count[p];
+      if (na < 2 && nb < 2)
+        throw std::invalid_argument(fmt::format("compare_welch_images: pixel {} has fewer than 2 Welch samples in both", p));
+      TileSums& s = t[size_t(y / k) * size_t(tx) + size_t(x / k)];
+      const Rgb ma = a.mean(p), mb = b.mean(p), va = a.variance(p), vb = b.variance(p);
+      const Rgb m3a = third ? a.third_central_moment(p) : Rgb(0.0), m3b = third ? b.third_central_moment(p) : Rgb(0.0);
+      for (int c = 0; c < 3; ++c) {
+        const double ea = na >= 2 ? va[c] / double(na) : 0.0, eb = nb >= 2 ? vb[c] / double(nb) : 0.0;
+        s.d[c] += ma[c] - mb[c];
+        s.v[c] += ea + eb;
+        s.dof_den[c] += (na >= 2 ? ea * ea / double(na - 1) : 0.0) + (nb >= 2 ? eb * eb / double(nb - 1) : 0.0);
+        s.k3[c] += k3_from_m3(m3a[c], na) / (double(na) * double(na)) - k3_from_m3(m3b[c], nb) / (double(nb) * double(nb));
+        s.max_abs_mean[c] = std::max({s.max_abs_mean[c], std::abs(ma[c]), std::abs(mb[c])});
+        s.sum_b[c] += mb[c];
+      }
+    }
+  return t;
+}
+
+}  // namespace
+
+double tile_skew_shift(const WelchImage& a, const WelchImage& b, int k) {
+  if (a.width != b.width || a.height != b.height || k < 1) throw std::invalid_argument("tile_skew_shift: bad sizes or k");
+  if (!a.has_third_moment() || !b.has_third_moment()) return 0.0;
+  const std::vector<TileSums> t = tile_sums(a, b, k);
+  double worst = 0.0;
+  for (int c = 0; c < 3; ++c) {
+    double sum_c = 0.0;
+    int64_t n = 0;
+    for (const TileSums& s : t) {
+      if (!(s.v[c] > 0)) continue;
+      const double ct = s.k3[c] / (6.0 * s.v[c] * std::sqrt(s.v[c]));
+      if (!std::isfinite(ct)) continue;
+      sum_c += ct;
+      ++n;
+    }
+    if (n > 0) worst = std::max(worst, std::abs(3.0 * sum_c / std::sqrt(double(n))));
+  }
+  return worst;
+}
+
+int choose_tile(const WelchImage& a, const WelchImage& b, double bound) {
+  const int whole = std::max(a.width, a.height);
+  for (int k = 1;; k *= 2) {
+    const int kk = std::min(k, whole);
+    if (kk == whole || tile_skew_shift(a, b, kk) <= bound) return kk;
+  }
+}
+
+namespace {
+
+ImageCompareResult compare_tiled(const WelchImage& a, const WelchImage& b, double alpha, const ImageCompareOptions& o) {
+  ImageCompareResult r;
+  r.alpha = alpha;
+  r.alpha_each = stats::sidak_alpha(alpha, 3);
+  r.tiled = true;
+  r.max_skew_shift = o.max_skew_shift;
+  r.third_moments = a.has_third_moment() && b.has_third_moment();
+  const int whole = std::max(a.width, a.height);
+  if (o.tile > 0)
+    r.tile = std::min(o.tile, whole);
+  else if (r.third_moments) {
+    r.tile = choose_tile(a, b, o.max_skew_shift);
+    r.tile_from_skewness = true;
+  } else
+    r.tile = std::min(std::max(1, o.fallback_tile), whole);
+  r.predicted_shift = tile_skew_shift(a, b, r.tile);
+  r.predicted_shift_pixel = tile_skew_shift(a, b, 1);
+  const std::vector<TileSums> tiles = tile_sums(a, b, r.tile);
+  std::vector<double> zc[3];
+  double min_p = 2.0, sum_diff = 0.0, sum_b = 0.0;
+  for (const TileSums& s : tiles)
+    for (int c = 0; c < 3; ++c) {
+      PixelChannelTest pc;
+      pc.x = s.x0;
+      pc.y = s.y0;
+      pc.channel = c;
+      pc.mean_a = s.d[c] + s.sum_b[c];  // tile sums
+      pc.mean_b = s.sum_b[c];
+      if (s.v[c] == 0.0) {
+        if (s.d[c] == 0.0)
+          ++r.skipped_identical;
+        else if (s.max_abs_mean[c] < kFloatVarianceFloor)
+          ++r.skipped_below_float_range;
+        else {
+          ++r.zero_variance_mismatch;
+          pc.p = 0.0;
+          pc.t = s.d[c] > 0 ? kInfinity : -kInfinity;
+          if (min_p > 0.0) {
+            min_p = 0.0;
+            r.worst = pc;
+          }
+        }
+        continue;
+      }
+      pc.t = s.d[c] / std::sqrt(s.v[c]);
+      // Satterthwaite's effective dof of a sum of independent variance estimates; infinite when
+      // only exact references (n < 2) and ... contribute no estimated variance.
+      pc.dof = s.dof_den[c] > 0 ? s.v[c] * s.v[c] / s.dof_den[c] : 1e12;
+      pc.p = stats::students_t_two_sided_p(pc.t, pc.dof);
+      pc.z = z_from_two_sided_p(pc.p, pc.t);
+      zc[c].push_back(pc.z);
+      sum_diff += s.d[c];
+      sum_b += s.sum_b[c];
+      if (pc.p < min_p) {
+        min_p = pc.p;
+        r.worst = pc;
+      }
+    }
+  finish_global_tests(r, zc, min_p, sum_diff, sum_b);
+  return r;
+}
+
+}  // namespace
+
 ImageCompareResult compare_welch_images(const WelchImage& a, const WelchImage& b, double alpha,
                                         const ImageCompareOptions& options) {
+  if (options.test == CompareTest::kTiled) {
+    if (a.width != b.width || a.height != b.height)
+      throw std::invalid_argument(
+          fmt::format("compare_welch_images: sizes differ ({}x{} vs {}x{})", a.width, a.height, b.width, b.height));
+    return compare_tiled(a, b, alpha, options);
+  }
   if (a.width != b.width || a.height != b.height)
     throw std::invalid_argument(
         fmt::format("compare_welch_images: sizes differ ({}x{} vs {}x{})", a.width, a.height, b.width, b.height));
@@ -135,10 +316,12 @@ ImageCompareResult compare_welch_images(const WelchImage& a, const WelchImage& b
   r.alpha = alpha;
   r.alpha_each = stats::sidak_alpha(alpha, 3);
   r.skew_corrected = options.skew_correction && a.has_third_moment() && b.has_third_moment();
+  r.third_moments = a.has_third_moment() && b.has_third_moment();
+  r.max_skew_shift = options.max_skew_shift;
+  r.predicted_shift = r.predicted_shift_pixel = tile_skew_shift(a, b, 1);
   const std::vector<Rgb> ga = r.skew_corrected ? pooled_skewness(a) : std::vector<Rgb>{};
   const std::vector<Rgb> gb = r.skew_corrected ? pooled_skewness(b) : std::vector<Rgb>{};
-  std::vector<double> z, zc[3];
-  z.reserve(a.pixels() * 3);
+  std::vector<double> zc[3];
   double min_p = 2.0, sum_diff = 0.0, sum_b = 0.0;
   for (size_t i = 0; i < a.pixels(); ++i) {
     const int64_t na = a.count[i], nb = b.count[i];
@@ -196,7 +379,6 @@ ImageCompareResult compare_welch_images(const WelchImage& a, const WelchImage& b
       pc.dof = t.dof;
       pc.p = t.p_value;
       pc.z = z_from_two_sided_p(t.p_value, t.statistic);
-      z.push_back(pc.z);
       zc[c].push_back(pc.z);
       sum_diff += ma[c] - mb[c];
       sum_b += mb[c];
@@ -206,31 +388,7 @@ ImageCompareResult compare_welch_images(const WelchImage& a, const WelchImage& b
       }
     }
   }
-  r.tested = static_cast<int64_t>(z.size());
-  r.mean_relative_difference = sum_b != 0.0 ? sum_diff / sum_b : 0.0;
-  if (r.tested > 0) {
-    r.alpha_pixel = stats::sidak_alpha(r.alpha_each, r.tested);
-    r.p_pixel_family = stats::sidak_adjust(std::min(min_p, 1.0), r.tested);
-    // The three channels of a pixel come from the same paths, so their z are correlated: the global
-    // tests run per channel and the channel with the smallest p is Šidák-adjusted over the three
-    // (valid under any dependence between channels for the min-p form, conservative here).
-    bool first = true;
-    for (int c = 0; c < 3; ++c) {
-      if (zc[c].empty()) continue;
-      const stats::TestResult st = stats::stouffer(zc[c]), sq = stats::sum_z2_test(zc[c]);
-      if (first || st.p_value < r.stouffer.p_value) {
-        r.stouffer = st;
-        r.stouffer_channel = c;
-      }
-      if (first || sq.p_value < r.sum_z2.p_value) {
-        r.sum_z2 = sq;
-        r.sum_z2_channel = c;
-      }
-      first = false;
-    }
-    r.stouffer.p_value = stats::sidak_adjust(r.stouffer.p_value, 3);
-    r.sum_z2.p_value = stats::sidak_adjust(r.sum_z2.p_value, 3);
-  }
+  finish_global_tests(r, zc, min_p, sum_diff, sum_b);
   return r;
 }
 

@@ -51,8 +51,22 @@ struct PixelChannelTest {
   double t = 0, dof = 0, p = 1, z = 0;
 };
 
+// Which Welch test (docs/statistics.md, "Heavy tails: the tiled Welch test"):
+//   kPixel  one test per pixel-channel (above);
+//   kTiled  one test per k x k tile and channel: D = sum over the tile of (mean_a - mean_b),
+//           Var(D) = sum of the squared standard errors (pixels independent within a pass),
+//           Satterthwaite's dof, then the same three global tests over the tiles. k is chosen
+//           from the third cumulants of the Welch samples (moment3 channels) as the smallest
+//           power of two whose predicted Stouffer shift is <= max_skew_shift (see tile_skew_shift),
+//           the whole image if none is.
+enum class CompareTest { kPixel, kTiled };
+
 struct ImageCompareOptions {
-  bool skew_correction = false;  // Hall's transformation of t, when both images have third moments
+  bool skew_correction = false;  // Hall's transformation of t, when both images have third moments (kPixel only)
+  CompareTest test = CompareTest::kPixel;
+  int tile = 0;                  // kTiled: 0 = choose k from the third moments; otherwise this k
+  double max_skew_shift = 0.25;  // kTiled: bound on the predicted |Stouffer shift| that chooses k
+  int fallback_tile = 8;         // kTiled, k = 0 and an image without third moments (older EXRs)
 };
 
 struct ImageCompareResult {
@@ -69,6 +83,16 @@ struct ImageCompareResult {
   stats::TestResult stouffer, sum_z2;  // of the channel with the smallest p; p Šidák-adjusted over 3
   int stouffer_channel = -1, sum_z2_channel = -1;
   double mean_relative_difference = 0;  // sum(mean_a - mean_b) / sum(mean_b), for messages
+  // Tiled test (ImageCompareOptions::test == kTiled). For kPixel, tile = 1 and the shifts are
+  // still predicted when both images have third moments.
+  bool tiled = false;
+  int tile = 1;                     // k; tested counts tile-channels, worst.x/y is a tile's top-left pixel
+  bool tile_from_skewness = false;  // k was chosen from the third moments (not given, not the fallback)
+  bool third_moments = false;       // both images have them, so the shifts below are measured
+  double predicted_shift = 0;       // largest over channels of |3 sum_tiles c_tile / sqrt(T)| at k
+  double predicted_shift_pixel = 0; // the same at k = 1 (the per-pixel test)
+  double max_skew_shift = 0.25;
+  bool skew_condition_met() const { return !third_moments || predicted_shift <= max_skew_shift; }
 
   bool rejects_pixel() const { return zero_variance_mismatch > 0 || p_pixel_family < alpha_each; }
   bool rejects_stouffer() const { return stouffer.p_value < alpha_each; }
@@ -85,6 +109,15 @@ struct ImageCompareResult {
 ImageCompareResult compare_welch_images(const WelchImage& a, const WelchImage& b, double alpha);
 ImageCompareResult compare_welch_images(const WelchImage& a, const WelchImage& b, double alpha,
                                         const ImageCompareOptions& options);
+
+// Predicted shift of Stouffer's Z from skewness for k x k tiles (docs/statistics.md): per tile and
+// channel c_tile = kappa3(D) / (6 Var(D)^(3/2)) with kappa3(D) = sum (k3_a / n_a^2 - k3_b / n_b^2)
+// (k3 the unbiased third cumulant of one pixel's Welch samples), E[t_tile] = -3 c_tile + O(1/n),
+// so E[Z] = -3 sum c_tile / sqrt(T) over the T tiles. Largest |.| over the channels; 0 when an
+// image has no third moments.
+double tile_skew_shift(const WelchImage& a, const WelchImage& b, int k);
+// The smallest k in 1, 2, 4, ... (the last candidate the whole image) with tile_skew_shift <= bound.
+int choose_tile(const WelchImage& a, const WelchImage& b, double bound);
 
 // Hall's transformation t' of a studentised statistic t with skewness coefficient c (see above).
 inline double hall_transform(double t, double c) { return t + c * (1.0 + 2.0 * t * t) + (4.0 / 3.0) * c * c * t * t * t; }

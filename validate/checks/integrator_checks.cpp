@@ -302,7 +302,8 @@ CheckResult run_agreement(const CheckContext& ctx, const SceneCase& sc, const st
   // difference was +0.003 (-0.0001): the small-sample skew bias of t summed over 540 pixels,
   // not a bias of pt. pt is compared on the image sum there (see image_sum).
   const bool aggregate = integrator == "pt" && sc.key == "caustic";
-  const ChannelCompare c = aggregate ? compare_channels(image_sum(a), image_sum(b), kAlpha) : compare_channels(a, b, kAlpha);
+  const ChannelCompare c = aggregate ? compare_channels(image_sum(a), image_sum(b), kAlpha)
+                                        : compare_channels(a, b, kAlpha, agreement_compare_options(integrator));
   CheckResult r = compare_record(c, control, (control ? what + " with a fault" : what) + (aggregate ? " (image sum)" : ""));
   r.details["image_sum_only"] = aggregate;
   r.samples = st.spp * run.film->pixel_count();

@@ -221,7 +221,14 @@ nlohmann::json ChannelCompare::details() const {
   return j;
 }
 
-ChannelCompare compare_channels(const WelchImage& a, const WelchImage& b, double alpha) {
+ImageCompareOptions agreement_compare_options(const std::string& integrator) {
+  ImageCompareOptions o;
+  if (integrator == "pt") o.test = CompareTest::kTiled;
+  return o;
+}
+
+ChannelCompare compare_channels(const WelchImage& a, const WelchImage& b, double alpha,
+                                const ImageCompareOptions& options) {
   ChannelCompare r;
   r.alpha = alpha;
   const double alpha_channel = stats::sidak_alpha(alpha, 3);
@@ -233,11 +240,13 @@ ChannelCompare compare_channels(const WelchImage& a, const WelchImage& b, double
         // Identical constant samples in both images: skipped by compare_welch_images.
         ac.sum[i][o] = bc.sum[i][o] = 0.0;
         ac.sum_sq[i][o] = bc.sum_sq[i][o] = 0.0;
+        if (ac.has_third_moment()) ac.sum_cu[i][o] = 0.0;
+        if (bc.has_third_moment()) bc.sum_cu[i][o] = 0.0;
       }
     // A pixel with fewer than two samples in both images cannot happen (see compare_welch_images),
     // and a known reference (count < 2) keeps its count, so the skipped channels read as mean 0,
     // variance 0 on both sides.
-    r.channel[c] = compare_welch_images(ac, bc, alpha_channel);
+    r.channel[c] = compare_welch_images(ac, bc, alpha_channel, options);
   }
   return r;
 }

@@ -103,7 +103,15 @@ struct ChannelCompare {
   std::string message() const;
   nlohmann::json details() const;
 };
-ChannelCompare compare_channels(const WelchImage& a, const WelchImage& b, double alpha);
+// `options` selects the per-pixel (default) or the tiled Welch test (validate/image_compare.h;
+// docs/statistics.md "Heavy tails"), applied to each channel.
+ChannelCompare compare_channels(const WelchImage& a, const WelchImage& b, double alpha,
+                                const ImageCompareOptions& options = {});
+// The test of the image-level agreement checks for `integrator` against a reference: the tiled
+// test (k from the stored third moments) where its condition of independent pixels within a pass
+// holds for the tested integrator (pt: every path adds to one pixel), the per-pixel test otherwise
+// (lt and bdpt splat; their rates are in docs/statistics.md).
+ImageCompareOptions agreement_compare_options(const std::string& integrator);
 
 // A check record from one image comparison. `expect_reject` for negative controls (the check
 // passes when the comparison rejects).
