@@ -597,9 +597,12 @@ const bool registered = [] {
                .run = [ac, integ](const CheckContext& c) { return run_analytic(c, ac, integ); }});
     for (const auto& sc : scene_cases())
       reg.add({.name = fmt::format("integrator.agreement.{}.{}", sc.key, integ),
-               .description = fmt::format("{} agrees with a longer bdpt reference on {} (Welch t per pixel-channel, "
+               .description = fmt::format("{} agrees with a longer bdpt reference on {} (Welch t per {}, "
                                           "Šidák; Stouffer; sum z^2), alpha 0.01",
-                                          integ, sc.file),
+                                          integ, sc.file,
+                                          agreement_compare_options(integ).test == CompareTest::kTiled
+                                              ? "k x k tile and channel, k from the third moments"
+                                              : "pixel-channel"),
                .kind = CheckKind::kStatistical,
                .run = [sc, integ](const CheckContext& c) { return run_agreement(c, sc, integ); }});
   }
