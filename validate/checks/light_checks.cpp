@@ -281,6 +281,99 @@ CheckResult run_emission_chi2(const CheckContext& ctx) {
         [&](const Vec3& w) { return env.pdf_li(Vec3(0.0), w, nullptr); },
         SamplerChi2Options{.samples = n, .seed = seed, .key = 5});
   });
+  labels.push_back("point light (sample_le direction)");
+  configs.push_back([](int64_t n, uint64_t seed) {
+    const Vec3 pos(0.3, -0.1, 0.2);
+    const PointLight point(pos, Rgb(1.0));
+    return chi2_test(
+        Chi2Domain::sphere(),
+        [&](Uniforms& u) -> std::optional<Vec3> {
+          const Vec2 up = u.next2();
+          const auto s = point.sample_le(up, u.next2());
+          if (!s) return std::nullopt;
+          // The origin must be the light's position; otherwise the sample is put off the sphere.
+          return s->ray.o == pos ? s->ray.d : Vec3(2.0);
+        },
+        [&](const Vec3& w) {
+          double pp, pd;
+          point.pdf_le(Hit{}, w, &pp, &pd);
+          return pd;
+        },
+        SamplerChi2Options{.samples = n, .seed = seed, .key = 6});
+  });
+  // Infinite lights emit from the disk of the scene sphere's radius R centred at c - R w,
+  // perpendicular to the direction of travel w (infinite_lights.h). The origin is binned in the
+  // disk's polar chart (rho^2 / R^2, phi / 2 pi), in which the disk's rim is the domain boundary
+  // and dA = pi R^2 d(rho^2/R^2) d(phi/2pi): p(chart) = pdf_pos * pi R^2. An origin off the disk's
+  // plane, or (directional light) a direction other than w, is put outside the chart.
+  const SceneSphere sphere{Vec3(0.4, -0.3, 0.2), 2.5};
+  auto disk_chart = [sphere](const Vec3& w, const Vec3& o) -> Vec2 {
+    const Frame fr = Frame::from_z(w);
+    const Vec3 q = fr.to_local(o - (sphere.center - sphere.radius * w));
+    if (std::abs(q.z) > 1e-9 * sphere.radius) return Vec2(-1.0);
+    const double s = (q.x * q.x + q.y * q.y) / (sphere.radius * sphere.radius);
+    return Vec2(std::min(s, 1.0), spherical_phi(Vec3(q.x, q.y, 0.0)) / (2.0 * kPi));
+  };
+  const Chi2Domain unit_square = Chi2Domain::rectangle(Vec2(0.0), Vec2(1.0), 41, 41);
+  labels.push_back("directional light (sample_le position on the emission disk)");
+  configs.push_back([=](int64_t n, uint64_t seed) {
+    const Vec3 w = glm::normalize(Vec3(-0.4, 0.7, -1.0));
+    DirectionalLight dir(w, Rgb(1.0));
+    dir.set_scene_sphere(sphere);
+    return chi2_test(
+        unit_square,
+        [&](Uniforms& u) -> std::optional<Vec2> {
+          const Vec2 up = u.next2();
+          const auto s = dir.sample_le(up, u.next2());
+          if (!s) return std::nullopt;
+          if (glm::length(s->ray.d - w) > 1e-12) return Vec2(-1.0);  // the fixed direction
+          return disk_chart(w, s->ray.o);
+        },
+        [&](const Vec2&) {
+          double pp, pd;
+          dir.pdf_le(Hit{}, w, &pp, &pd);
+          return pp * kPi * sphere.radius * sphere.radius;
+        },
+        SamplerChi2Options{.samples = n, .seed = seed, .key = 7});
+  });
+  labels.push_back("constant environment (sample_le direction)");
+  configs.push_back([=](int64_t n, uint64_t seed) {
+    ConstantEnvironmentLight env(Rgb(1.0));
+    env.set_scene_sphere(sphere);
+    return chi2_test(
+        Chi2Domain::sphere(),
+        [&](Uniforms& u) -> std::optional<Vec3> {
+          const Vec2 up = u.next2();
+          const auto s = env.sample_le(up, u.next2());
+          if (!s) return std::nullopt;
+          return disk_chart(s->ray.d, s->ray.o).x >= 0.0 ? s->ray.d : Vec3(2.0);
+        },
+        [&](const Vec3& w) {
+          double pp, pd;
+          env.pdf_le(Hit{}, w, &pp, &pd);
+          return pd;
+        },
+        SamplerChi2Options{.samples = n, .seed = seed, .key = 8});
+  });
+  labels.push_back("constant environment (sample_le position on the emission disk)");
+  configs.push_back([=](int64_t n, uint64_t seed) {
+    ConstantEnvironmentLight env(Rgb(1.0));
+    env.set_scene_sphere(sphere);
+    return chi2_test(
+        unit_square,
+        [&](Uniforms& u) -> std::optional<Vec2> {
+          const Vec2 up = u.next2();
+          const auto s = env.sample_le(up, u.next2());
+          if (!s) return std::nullopt;
+          return disk_chart(s->ray.d, s->ray.o);
+        },
+        [&](const Vec2&) {
+          double pp, pd;
+          env.pdf_le(Hit{}, Vec3(0, 0, 1), &pp, &pd);
+          return pp * kPi * sphere.radius * sphere.radius;
+        },
+        SamplerChi2Options{.samples = n, .seed = seed, .key = 9});
+  });
   return chi2_configs(ctx, "light.emission.chi2", configs, labels, 200000, 2000000);
 }
 
@@ -341,8 +434,9 @@ TB_REGISTER_CHECK({.name = "light.area.sample_li.negative_control",
                    .kind = CheckKind::kStatistical,
                    .run = run_negative_control});
 TB_REGISTER_CHECK({.name = "light.emission.chi2",
-                   .description = "Emission directions (one- and two-sided area lights, spot light) and environment "
-                                  "directions against their stated solid-angle densities",
+                   .description = "Emission sampling (one- and two-sided area light and spot light directions, point light "
+                                  "direction, directional and environment emission-disk positions and directions) and "
+                                  "environment next-event directions against their stated densities",
                    .kind = CheckKind::kStatistical,
                    .run = run_emission_chi2});
 TB_REGISTER_CHECK({.name = "light.area.nee_irradiance",
