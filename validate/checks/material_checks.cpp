@@ -496,7 +496,8 @@ class ScaledBsdf final : public Bsdf {
 
 // Albedo of light arriving from w: the mean weight of kImportance sampling from w (bsdf.h).
 // Returns the one-sided z-test of H0: albedo <= 1.
-stats::TestResult furnace(const Bsdf& b, const Vec3& w, int64_t n, uint64_t seed, uint64_t key, double* mean_out) {
+stats::TestResult furnace(const Bsdf& b, const Vec3& w, int64_t n, uint64_t seed, uint64_t key, double* mean_out,
+                          double* se_out = nullptr) {
   std::vector<double> x(static_cast<size_t>(n));
   parallel_for(static_cast<size_t>(n), [&](size_t i) {
     Rng r = Rng::for_sample(seed, key, i);
@@ -513,6 +514,7 @@ stats::TestResult furnace(const Bsdf& b, const Vec3& w, int64_t n, uint64_t seed
   const double nn = static_cast<double>(n), mean = s1.value() / nn;
   const double var = std::max(0.0, (s2.value() - nn * mean * mean) / (nn - 1));
   *mean_out = mean;
+  if (se_out) *se_out = std::sqrt(var / nn);
   return stats::z_test_greater(mean, std::sqrt(var / nn), 1.0);
 }
 
@@ -666,24 +668,9 @@ CheckResult run_furnace_quadrature(const CheckContext& ctx, double scale) {
     for (double t : thetas) {
       const Vec3 wo = wo_at(t);
       const QuadratureAlbedo q = quadrature_albedo(*b, wo, a_param);
-      double mc = 0;
       // The sampling furnace as a second opinion: its mean must equal the quadrature value.
-      std::vector<double> x(static_cast<size_t>(n));
-      parallel_for(static_cast<size_t>(n), [&](size_t i) {
-        Rng r = Rng::for_sample(ctx.seed, hash_string("furnace_quadrature" + c.label() + std::to_string(t)), i);
-        const double uc = r.uniform();
-        const Vec2 u = r.uniform2();
-        const auto smp = b->sample(wo, uc, u, TransportMode::kImportance);
-        x[i] = smp ? max_component(smp->weight) : 0.0;
-      });
-      CompensatedSum s1, s2;
-      for (double v : x) {
-        s1 += v;
-        s2 += v * v;
-      }
-      const double nn = static_cast<double>(n);
-      mc = s1.value() / nn;
-      const double se = std::sqrt(std::max(0.0, (s2.value() - nn * mc * mc) / (nn - 1)) / nn);
+      double mc = 0, se = 0;
+      furnace(*b, wo, n, ctx.seed, hash_string("furnace_quadrature" + c.label() + std::to_string(t)), &mc, &se);
       // The quadrature is trusted to kQuadratureTol absolute (the unit Lambert anchor below shows how
       // close it gets); without the floor a sampler whose weights are all equal (se = 0, IOR near 1)
       // would be compared against the quadrature's own, optimistic error estimate.
