@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "app/cmd_compare.h"
+#include "app/cli_domains.h"
 #include "app/cmd_render.h"
 #include "app/progress.h"
 #include "lib/core/atomic_file.h"
@@ -165,7 +166,8 @@ int main(int argc, char** argv) {
   check->add_option("names", ca.names, "Checks to run: full names, group prefixes (core.warp) or globs (*chi2)");
   auto* q = check->add_flag("--quick", ca.quick, "Quick sample sizes (default)");
   check->add_flag("--full", ca.full, "Full sample sizes of docs/validation.md")->excludes(q);
-  check->add_option("--seed", ca.seed, "Run seed; each check derives its own scrambled seed from it");
+  check->add_option("--seed", ca.seed, "Run seed; each check derives its own scrambled seed from it")
+      ->check(tb::cli::unsigned_integer());
   check->add_option("--out", ca.out, "Output folder for results.json, records/ and index.html")->capture_default_str();
   check->add_option("--attempt", ca.attempt, "Run the k-th rerun directly (fresh seed, 4x samples); for reproducers")
       ->check(CLI::Range(0, 1));
@@ -178,7 +180,8 @@ int main(int argc, char** argv) {
   repro->add_option("name", ra.name, "Experiment name (see --list)");
   auto* rq = repro->add_flag("--quick", ra.quick, "Quick size (default)");
   repro->add_flag("--full", ra.full, "Paper-scale replicate counts")->excludes(rq);
-  repro->add_option("--seed", ra.seed, "Run seed");
+  repro->add_option("--seed", ra.seed, "Run seed")
+      ->check(tb::cli::unsigned_integer());
   repro->add_option("--out", ra.out, "Output folder (default reports/out/NAME)");
   repro->add_flag("--list", ra.list, "List the experiments and exit");
   repro->add_flag("--no-progress", ra.no_progress, "No progress line on stderr");
@@ -187,11 +190,16 @@ int main(int argc, char** argv) {
   auto* render = app.add_subcommand("render", "Render a scene file to OpenEXR (+ PNG preview, JSON record)");
   render->add_option("scene", rargs.scene, "Scene file (JSON, or Mitsuba XML by content; docs/scene.md)");
   render->add_option("--integrator", rargs.integrator, "Integrator name (see --list)")->capture_default_str();
-  render->add_option("--spp", rargs.spp, "Samples per pixel (default: the scene's, else 16); with --time, per pass (default 1, PSS MCMC: 65536 / pixels)");
-  render->add_option("--passes", rargs.passes, "Welch samples per pixel (spp is split over them)")->capture_default_str();
-  render->add_option("--time", rargs.time_s, "Time budget in seconds: render passes until it runs out");
-  render->add_option("--seed", rargs.seed, "Seed");
-  render->add_option("--threads", rargs.threads, "Worker threads (0: all cores)");
+  render->add_option("--spp", rargs.spp, "Samples per pixel (default: the scene's, else 16); with --time, per pass (default 1, PSS MCMC: 65536 / pixels)")
+      ->check(tb::cli::integer_at_least(1));
+  render->add_option("--passes", rargs.passes, "Welch samples per pixel (spp is split over them)")->capture_default_str()
+      ->check(tb::cli::integer_at_least(1));
+  render->add_option("--time", rargs.time_s, "Time budget in seconds: render passes until it runs out")
+      ->check(tb::cli::positive_number());
+  render->add_option("--seed", rargs.seed, "Seed")
+      ->check(tb::cli::unsigned_integer());
+  render->add_option("--threads", rargs.threads, "Worker threads (0: all cores)")
+      ->check(tb::cli::integer_at_least(0));
   render->add_option("-o,--out", rargs.out, "Output EXR path")->capture_default_str();
   render->add_option("--resolution", rargs.resolution, "WxH: override the scene camera's resolution");
   render->add_option("--param", rargs.params,
@@ -220,7 +228,8 @@ int main(int argc, char** argv) {
   compare->add_option("--reference-variance", cmpa.reference_variance,
                       "A.exr: the per-pixel variance of the reference's mean (.pfm or .exr; squared standard error)");
   compare->add_option("--alpha", cmpa.alpha, "A.exr B.exr: significance level of the whole comparison")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(tb::cli::number_in(0, false, 1, false));
   compare->add_option("--json", cmpa.json_out, "A.exr B.exr: write the full result to this JSON file");
   compare->add_flag("--skew-correction", cmpa.skew_correction,
                     "A.exr B.exr: Hall's skewness transformation of each pixel's t (experimental; docs/integrator.md)");
@@ -230,30 +239,37 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"tiled", "pixel"}))
       ->capture_default_str();
   compare->add_option("--tile", cmpa.tile, "A.exr B.exr, --test tiled: tile size K (default: chosen from the skewness)")
-      ->check(CLI::PositiveNumber);
+      ->check(tb::cli::integer_at_least(1));
   tb::CompareSceneArgs& cs = cmpa.scene;
   const std::vector<std::string> compare_scene_opts = {"--integrators", "--time",  "--reference",   "--out",
                                                        "--checkpoints", "--resolution", "--seed", "--threads", "--pass-spp",
                                                        "--floor",       "--error-scale", "--resume", "--no-progress"};
   compare->add_option("--integrators", cs.integrators, "SCENE: integrators to compare, comma separated (tb render --list)")
       ->delimiter(',');
-  compare->add_option("--time", cs.time_s, "SCENE: time budget S in seconds of the largest checkpoint");
+  compare->add_option("--time", cs.time_s, "SCENE: time budget S in seconds of the largest checkpoint")
+      ->check(tb::cli::positive_number());
   compare->add_option("--reference", cs.reference,
                       "SCENE: reference EXR (default: render one with bdpt for 4 x S, announced on stdout)");
   compare->add_option("-o,--out", cs.out, "SCENE: output folder (default reports/out/compare-<scene name>)");
   compare->add_option("--checkpoints", cs.checkpoints, "SCENE: K independent runs with budgets S/2^(K-1) ... S/2, S")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(tb::cli::number_in(3, true, 16, true));
   compare->add_option("--resolution", cs.resolution, "SCENE: WxH, overrides the scene camera's resolution");
-  compare->add_option("--seed", cs.seed, "SCENE: seed (each run derives its own)")->capture_default_str();
+  compare->add_option("--seed", cs.seed, "SCENE: seed (each run derives its own)")->capture_default_str()
+      ->check(tb::cli::unsigned_integer());
   compare->add_option("--pass-spp", cs.pass_spp,
                       "SCENE: samples (MCMC: mutations) per pixel per pass; 0: 1, or enough to outweigh the PSS "
-                      "bootstrap")->capture_default_str();
-  compare->add_option("--threads", cs.threads, "SCENE: worker threads (0: all cores)")->capture_default_str();
+                      "bootstrap")->capture_default_str()
+      ->check(tb::cli::integer_at_least(0));
+  compare->add_option("--threads", cs.threads, "SCENE: worker threads (0: all cores)")->capture_default_str()
+      ->check(tb::cli::integer_at_least(0));
   compare->add_option("--floor", cs.floor_fraction,
                       "SCENE: leave out pixel-channels whose reference is below this fraction of its mean")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(tb::cli::number_in(0, true, 1, false));
   compare->add_option("--error-scale", cs.error_scale, "SCENE: relative error shown white in the error maps")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(tb::cli::positive_number());
   compare->add_flag("--resume", cs.resume, "SCENE: reuse the runs of an interrupted invocation with the same settings");
   compare->add_flag("--no-progress", cs.no_progress, "SCENE: no progress line on stderr");
 
@@ -263,7 +279,13 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   report->add_option("--out", report_out, "Output folder (default: the JSON file's folder)");
 
-  CLI11_PARSE(app, argc, argv);
+  // Every parse error (unknown option, unconvertible or out-of-domain value) exits with status 2;
+  // --help exits 0.
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
   try {
     if (*check) return cmd_check(ca);
     if (*repro) return cmd_reproduce(ra);
