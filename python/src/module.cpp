@@ -15,6 +15,7 @@
 #include "lib/core/hash.h"
 #include "lib/core/warp_sphere.h"
 #include "python/src/chi2_numpy.h"
+#include "python/src/render_python.h"
 #include "validate/chi2/sampler_chi2.h"
 #include "validate/stats/tests.h"
 #include "validate/stats/welford.h"
@@ -291,4 +292,5 @@ PYBIND11_MODULE(testbench, m) {
   m.def("z_test_power", &st::z_test_power, py::arg("delta"), py::arg("alpha"));
   m.def("minimal_detectable_bias", &st::minimal_detectable_bias, py::arg("std_error"), py::arg("alpha"),
         py::arg("power") = 0.9);
+  tb::python::bind_render(m);
 }
