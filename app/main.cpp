@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <map>
 
 #include <unistd.h>
 
@@ -15,6 +16,7 @@
 #include "app/cmd_compare.h"
 #include "app/cli_domains.h"
 #include "app/cmd_render.h"
+#include "app/mpi_world.h"
 #include "app/progress.h"
 #include "lib/core/atomic_file.h"
 #include "reports/compare_report.h"
@@ -50,13 +52,19 @@ int cmd_check(const CheckArgs& a) {
     fmt::print(stderr, " (see tb check --list)\n");
     return 2;
   }
-  const bool progress = !a.no_progress && isatty(STDERR_FILENO);
+  // Under mpirun: rank r runs the checks whose index is r mod n; rank 0 alone prints, writes the
+  // records, the results and the report (docs/checks-and-reports.md, "Under mpirun").
+  const tb::mpi::World& world = tb::mpi::world();
+  std::vector<const tb::Check*> mine;
+  for (size_t i = 0; i < selected.size(); ++i)
+    if (static_cast<int>(i % static_cast<size_t>(world.size)) == world.rank) mine.push_back(selected[i]);
+  const bool progress = world.rank == 0 && !a.no_progress && isatty(STDERR_FILENO);
   tb::ProgressLine line(progress);
   tb::RunOptions opt;
   opt.seed = a.seed;
   opt.full = a.full;
   opt.attempt = a.attempt;
-  opt.out_dir = a.out;
+  opt.out_dir = world.rank == 0 ? a.out : std::string();
   opt.resume = a.resume;
   opt.interrupted = &g_interrupted;
   opt.on_progress = [&line](double f) { line.update(f); };
@@ -75,11 +83,42 @@ int cmd_check(const CheckArgs& a) {
       fmt::print("           rerun (fresh seed, 4x samples): {}\n", (*rec)["rerun"].value("message", ""));
     std::fflush(stdout);
   };
+  if (world.rank != 0) opt.on_check = {};
   std::signal(SIGINT, on_sigint);
   std::signal(SIGTERM, on_sigint);
-  fmt::print("tb check: {} checks, {} size, seed {}, results in {}\n", selected.size(), a.full ? "full" : "quick",
-             a.seed, a.out);
-  tb::RunSummary s = tb::run_checks(selected, opt);
+  if (world.rank == 0)
+    fmt::print("tb check: {} checks, {} size, seed {}, results in {}{}\n", selected.size(), a.full ? "full" : "quick",
+               a.seed, a.out, world.size > 1 ? fmt::format(" ({} MPI ranks)", world.size) : "");
+  tb::RunSummary s = tb::run_checks(mine, opt);
+  if (world.size > 1) {
+    const nlohmann::json part = {{"checks", s.results["checks"]}, {"interrupted", s.interrupted}, {"resumed", s.resumed}};
+    const std::vector<std::string> parts = tb::mpi::gather(part.dump());
+    if (world.rank != 0) return tb::mpi::broadcast(0);
+    std::map<std::string, nlohmann::json> by_name;
+    tb::RunSummary merged;
+    for (const std::string& text : parts) {
+      const nlohmann::json j = nlohmann::json::parse(text);
+      merged.interrupted = merged.interrupted || j.value("interrupted", false);
+      merged.resumed += j.value("resumed", size_t{0});
+      for (const auto& rec : j["checks"]) by_name[rec.value("name", "")] = rec;
+    }
+    merged.results["config"] = s.results["config"];
+    merged.results["config"]["checks"] = selected.size();
+    merged.results["config"]["mpi_ranks"] = world.size;
+    merged.results["checks"] = nlohmann::json::array();
+    for (const tb::Check* c : selected) {  // the selection's order, whatever rank ran each
+      const auto it = by_name.find(c->name);
+      if (it == by_name.end()) continue;  // not reached: a rank was interrupted
+      tb::write_file_atomic((std::filesystem::path(a.out) / "records" / (c->name + ".json")).string(),
+                            it->second.dump(1));
+      (it->second.value("passed", false) ? merged.passed : merged.failed) += 1;
+      merged.results["checks"].push_back(it->second);
+    }
+    merged.results["passed"] = merged.passed;
+    merged.results["failed"] = merged.failed;
+    merged.results["interrupted"] = merged.interrupted;
+    s = std::move(merged);
+  }
 
   const std::string results_path = (std::filesystem::path(a.out) / "results.json").string();
   tb::write_file_atomic(results_path, s.results.dump(1));
@@ -98,8 +137,7 @@ int cmd_check(const CheckArgs& a) {
         fmt::print("    rerun: {}\n    {}\n", rec["rerun"].value("message", ""), rec["rerun"].value("reproducer", ""));
     }
   }
-  if (s.interrupted) return 130;
-  return s.failed > 0 ? 1 : 0;
+  return tb::mpi::broadcast(s.interrupted ? 130 : s.failed > 0 ? 1 : 0);
 }
 
 struct ReproduceArgs {
@@ -158,6 +196,10 @@ int cmd_report(const std::string& json_path, const std::string& out) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  tb::mpi::init(&argc, &argv);  // only under an MPI launcher
+  struct Finalize {
+    ~Finalize() { tb::mpi::finalize(); }
+  } finalize_mpi;
   CLI::App app{"tb: a test bench for Monte Carlo and MCMC light transport estimators"};
   app.require_subcommand(1);
 

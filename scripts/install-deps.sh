@@ -6,7 +6,7 @@ pkgs=(cmake g++ make pkg-config
       libglm-dev libtbb-dev libboost-dev libeigen3-dev libceres-dev
       nlohmann-json3-dev libfmt-dev libcli11-dev libembree-dev libopenexr-dev libtinyobjloader-dev
       libpng-dev libpugixml-dev libgtest-dev libgmock-dev libbenchmark-dev gnuplot-nox
-      pybind11-dev python3-dev python3-numpy python3-pytest chromium)
+      pybind11-dev python3-dev python3-numpy python3-pytest chromium libopenmpi-dev openmpi-bin)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
