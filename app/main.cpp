@@ -40,13 +40,16 @@ struct CheckArgs {
 
 int cmd_check(const CheckArgs& a) {
   const auto selected = tb::Registry::global().select(a.names);
+  const bool quiet_rank = tb::mpi::world().rank != 0;  // under mpirun only rank 0 prints
   if (a.list) {
+    if (quiet_rank) return 0;
     for (const tb::Check* c : selected)
       fmt::print("{:<52} {:<13} {}\n", c->name, c->kind == tb::CheckKind::kStatistical ? "statistical" : "deterministic",
                  c->description);
     return 0;
   }
   if (selected.empty()) {
+    if (quiet_rank) return 2;
     fmt::print(stderr, "tb check: no check matches");
     for (const auto& n : a.names) fmt::print(stderr, " '{}'", n);
     fmt::print(stderr, " (see tb check --list)\n");
