@@ -11,16 +11,20 @@
 
 namespace tb::cli {
 
-// An integer >= lo (rejects fractions, non-numbers and out-of-range values).
-inline CLI::Validator integer_at_least(long long lo) {
+// An integer in [lo, hi] (rejects fractions, non-numbers and out-of-range values).
+inline CLI::Validator integer_in(long long lo, long long hi) {
+  const std::string domain = hi == std::numeric_limits<long long>::max() ? fmt::format(">= {}", lo)
+                                                                        : fmt::format("in [{}, {}]", lo, hi);
   return CLI::Validator(
-      [lo](std::string& s) -> std::string {
+      [=](std::string& s) -> std::string {
         long long v = 0;
-        if (!CLI::detail::lexical_cast(s, v) || v < lo) return fmt::format("must be an integer >= {} (got '{}')", lo, s);
+        if (!CLI::detail::lexical_cast(s, v) || v < lo || v > hi)
+          return fmt::format("must be an integer {} (got '{}')", domain, s);
         return {};
       },
-      fmt::format("INT >= {}", lo));
+      "INT " + domain);
 }
+inline CLI::Validator integer_at_least(long long lo) { return integer_in(lo, std::numeric_limits<long long>::max()); }
 
 // An unsigned 64-bit integer written in decimal digits (seeds; "-1" would otherwise wrap around).
 inline CLI::Validator unsigned_integer() {

@@ -205,10 +205,6 @@ int cmd_compare(const CompareArgs& a, const std::atomic<bool>* interrupted) {
       return 2;
     }
     if (!reject_options(a.scene_options_given, "reference (A.exr --reference-mean R --reference-variance V)")) return 2;
-    if (!(a.alpha > 0 && a.alpha < 1)) {
-      fmt::print(stderr, "tb compare: --alpha must lie in (0, 1)\n");
-      return 2;
-    }
     return compare_images(a);
   }
   if (a.inputs.size() == 1 && !is_image(a.inputs[0])) {
@@ -219,10 +215,6 @@ int cmd_compare(const CompareArgs& a, const std::atomic<bool>* interrupted) {
   }
   if (a.inputs.size() == 2 && is_image(a.inputs[0]) && is_image(a.inputs[1])) {
     if (!reject_options(a.scene_options_given, "image (A.exr B.exr)")) return 2;
-    if (!(a.alpha > 0 && a.alpha < 1)) {
-      fmt::print(stderr, "tb compare: --alpha must lie in (0, 1)\n");
-      return 2;
-    }
     return compare_images(a);
   }
   fmt::print(stderr,

@@ -22,7 +22,7 @@ namespace tb {
 
 struct CompareArgs {
   std::vector<std::string> inputs;  // A.exr B.exr, or SCENE
-  double alpha = 0.01;
+  double alpha = 0.01;              // in (0, 1), enforced by the command line (app/cli_domains.h)
   std::string json_out;             // optional: the full result as JSON
   bool skew_correction = false;     // Hall's transformation of t where moment3 is stored (experimental, --test pixel)
   std::string test = "tiled";       // tiled | pixel (validate/image_compare.h, CompareTest)

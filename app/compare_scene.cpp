@@ -173,18 +173,6 @@ int cmd_compare_scene(const CompareSceneArgs& a, const std::atomic<bool>* interr
     fmt::print(stderr, "tb compare: --time S (seconds, > 0) is required with a scene\n");
     return 2;
   }
-  if (a.checkpoints < 3 || a.checkpoints > 16) {
-    fmt::print(stderr, "tb compare: --checkpoints must lie in [3, 16] (the rate fit has two parameters)\n");
-    return 2;
-  }
-  if (!(a.floor_fraction >= 0 && a.floor_fraction < 1)) {
-    fmt::print(stderr, "tb compare: --floor must lie in [0, 1)\n");
-    return 2;
-  }
-  if (!(a.error_scale > 0)) {
-    fmt::print(stderr, "tb compare: --error-scale must be > 0\n");
-    return 2;
-  }
   if (!a.reference.empty() && !fs::exists(a.reference)) {
     fmt::print(stderr, "tb compare: reference '{}' does not exist\n", a.reference);
     return 2;

@@ -25,6 +25,8 @@
 
 namespace tb {
 
+// The numeric fields' domains are enforced where the command line is parsed (app/cli_domains.h,
+// app/main.cpp): K in [3, 16], floor in [0, 1), error scale > 0, threads and pass_spp >= 0.
 struct CompareSceneArgs {
   std::string scene;
   std::vector<std::string> integrators;

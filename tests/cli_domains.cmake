@@ -55,6 +55,7 @@ set(c compare "${scene}" --integrators pt --time 1 --no-progress -o "${WORK}/rej
 rejected(--time compare "${scene}" --integrators pt --time -1)
 rejected(--checkpoints ${c} --checkpoints 2)
 rejected(--checkpoints ${c} --checkpoints 17)
+rejected(--checkpoints ${c} --checkpoints 3.5)
 rejected(--threads ${c} --threads -1)
 rejected(--pass-spp ${c} --pass-spp -4)
 rejected(--floor ${c} --floor 1)

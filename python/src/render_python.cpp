@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -23,7 +24,7 @@ namespace py = pybind11;
 namespace tb::python {
 namespace {
 
-py::dict render(const std::string& scene, const std::string& integrator, int64_t spp, int64_t passes, uint64_t seed,
+py::dict render(const std::string& scene, const std::string& integrator, std::optional<int64_t> spp, int64_t passes, uint64_t seed,
                 const std::string& resolution, int threads, const std::map<std::string, double>& params) {
   const IntegratorInfo* integ = find_integrator(integrator);
   if (integ == nullptr) {
@@ -33,7 +34,7 @@ py::dict render(const std::string& scene, const std::string& integrator, int64_t
   }
   if (integrator.rfind("ramlt-", 0) == 0)
     throw py::value_error("render: the ramlt-* integrators run from `tb render` only (their partition option)");
-  if (spp < 1) throw py::value_error(fmt::format("render: spp must be an integer >= 1 (got {})", spp));
+  if (spp && *spp < 1) throw py::value_error(fmt::format("render: spp must be an integer >= 1 (got {})", *spp));
   if (passes < 1) throw py::value_error(fmt::format("render: passes must be an integer >= 1 (got {})", passes));
   if (threads < 0) throw py::value_error(fmt::format("render: threads must be an integer >= 0 (got {})", threads));
   if (const std::string err = validate_params(*integ, params); !err.empty()) throw py::value_error("render: " + err);
@@ -41,9 +42,9 @@ py::dict render(const std::string& scene, const std::string& integrator, int64_t
   const std::unique_ptr<World> world = load_scene_file(scene, resolution);  // errors name file, line and key
   RenderSettings st;
   st.seed = seed;
-  st.spp = spp;
+  st.spp = spp ? *spp : world->integrator_defaults().value("spp", int64_t{16});  // as tb render
   st.max_depth = world->integrator_defaults().value("max_depth", 10);
-  st.passes = std::min(passes, spp);
+  st.passes = std::min(passes, st.spp);
   st.params = params;
   Film film(world->camera().width(), world->camera().height());
   int64_t done = 0;
@@ -74,7 +75,7 @@ py::dict render(const std::string& scene, const std::string& integrator, int64_t
   out["mean"] = mean;
   out["variance_of_mean"] = var;
   out["passes"] = done;
-  out["spp"] = spp;
+  out["spp"] = st.spp;
   out["seconds"] = seconds;
   out["integrator"] = integrator;
   return out;
@@ -83,11 +84,11 @@ py::dict render(const std::string& scene, const std::string& integrator, int64_t
 }  // namespace
 
 void bind_render(py::module_& m) {
-  m.def("render", &render, py::arg("scene"), py::arg("integrator") = "pt", py::arg("spp") = 16, py::arg("passes") = 8,
+  m.def("render", &render, py::arg("scene"), py::arg("integrator") = "pt", py::arg("spp") = py::none(), py::arg("passes") = 8,
         py::arg("seed") = 1, py::arg("resolution") = "", py::arg("threads") = 0,
         py::arg("params") = std::map<std::string, double>{},
         "Render a scene file (JSON, or Mitsuba XML by content) with a registered integrator (`tb render --list`). "
-        "spp samples (MCMC: mutations) per pixel split over `passes` independent passes; resolution 'WxH' "
+        "spp samples (MCMC: mutations) per pixel (default: the scene's, else 16) split over `passes` independent passes; resolution 'WxH' "
         "overrides the camera's; threads 0 = all cores. Returns a dict: mean and variance_of_mean as (H, W, 3) "
         "arrays (variance_of_mean is NaN with one pass), passes, spp, seconds, integrator. Releases the GIL.");
 }

@@ -28,6 +28,9 @@ def test_render_returns_mean_and_variance_arrays():
     assert np.all(np.isfinite(r["mean"])) and np.all(r["variance_of_mean"] >= 0)
     assert r["mean"].mean() > 0.01
     assert r["passes"] == 8 and r["spp"] == 16 and r["integrator"] == "pt" and r["seconds"] >= 0
+    # without spp, the scene's (as tb render): cornell-box.json sets 64
+    d = tb.render(SCENE, integrator="pt", passes=2, resolution="4x4", threads=1)
+    assert d["spp"] == 64
     # the same seed gives the same image, whatever the thread count
     again = tb.render(SCENE, integrator="pt", spp=16, passes=8, seed=1, resolution="12x8", threads=2)
     np.testing.assert_array_equal(r["mean"], again["mean"])
