@@ -70,11 +70,7 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   std::unique_ptr<World> world = load_scene_file(a.scene, a.resolution);
   const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count();
 
-  RenderSettings st;
-  st.seed = a.seed;
-  st.spp = a.spp > 0 ? a.spp : world->integrator_defaults().value("spp", int64_t{16});
-  st.max_depth = world->integrator_defaults().value("max_depth", 10);
-  st.passes = std::min(a.passes, st.spp);
+  RenderSettings st = fixed_work_settings(*world, a.spp, a.passes, a.seed);
   st.time_budget_s = a.time_s;
   st.interrupted = interrupted;
   st.params = params;

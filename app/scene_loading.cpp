@@ -31,6 +31,15 @@ std::unique_ptr<World> load_scene_file(const std::string& path, const std::strin
   return load_world_from_string(j.dump(1), path, parent.empty() ? "." : parent.string());
 }
 
+RenderSettings fixed_work_settings(const World& world, int64_t spp, int64_t passes, uint64_t seed) {
+  RenderSettings st;
+  st.seed = seed;
+  st.spp = spp > 0 ? spp : world.integrator_defaults().value("spp", int64_t{16});
+  st.max_depth = world.integrator_defaults().value("max_depth", 10);
+  st.passes = std::min(passes, st.spp);
+  return st;
+}
+
 // Samples per pixel per pass of a time-budgeted run (see scene_loading.h): 1, except for the
 // integrators on the primary-sample-space driver, whose every pass starts with a bootstrap of at
 // least 8192 samples (PssSettings::bootstrap_for): n = ceil(65536 / P), so that a pass's mutations

@@ -8,6 +8,7 @@
 #include <string>
 #include <utility>
 
+#include "lib/integrator/render_settings.h"
 #include "lib/scene/world.h"
 
 namespace tb {
@@ -18,6 +19,11 @@ std::pair<int, int> parse_resolution(const std::string& s);
 // The scene file; when `resolution` is not empty, the camera's "resolution" is replaced by it
 // before the scene is built (relative paths in the file still resolve against its folder).
 std::unique_ptr<World> load_scene_file(const std::string& path, const std::string& resolution);
+
+// The settings of a fixed-work render, as `tb render` and the Python module's render() make them:
+// spp samples per pixel (0: the scene's "integrator.spp", else 16), the scene's max_depth (else
+// 10), `passes` passes (at most spp).
+RenderSettings fixed_work_settings(const World& world, int64_t spp, int64_t passes, uint64_t seed);
 
 // Time-budgeted runs use open-ended passes (far more than any budget reaches) of n samples per
 // pixel each, spp = n * passes: n samples per pixel for path tracing, light tracing and BDPT; n P

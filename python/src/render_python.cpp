@@ -40,11 +40,7 @@ py::dict render(const std::string& scene, const std::string& integrator, std::op
   if (const std::string err = validate_params(*integ, params); !err.empty()) throw py::value_error("render: " + err);
 
   const std::unique_ptr<World> world = load_scene_file(scene, resolution);  // errors name file, line and key
-  RenderSettings st;
-  st.seed = seed;
-  st.spp = spp ? *spp : world->integrator_defaults().value("spp", int64_t{16});  // as tb render
-  st.max_depth = world->integrator_defaults().value("max_depth", 10);
-  st.passes = std::min(passes, st.spp);
+  RenderSettings st = fixed_work_settings(*world, spp.value_or(0), passes, seed);  // as tb render
   st.params = params;
   Film film(world->camera().width(), world->camera().height());
   int64_t done = 0;
