@@ -1,6 +1,8 @@
 #include "lib/differential/variance_bound.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Eigenvalues>
 
@@ -66,6 +68,48 @@ DerivativeFreeRatio variance_ratio_derivative_free(const World& world, const For
     out.r += term;
   }
   return out;
+}
+
+double subpath_variance_ratio(const World& world, std::span<const PathVertex> camera, int t, int s,
+                              bool mis_reduction) {
+  const size_t n = t < 0 ? camera.size() : std::min(camera.size(), static_cast<size_t>(t));
+  if (n < 3) return 1.0;
+  // The last bounce whose sampled direction enters the sum (index into camera).
+  size_t last = n - 2;
+  if (s == 0 && mis_reduction) --last;
+  if (last < 1) return 1.0;
+  const Camera& cam = world.camera();
+  const Vec3 d0 = direction(camera[0], camera[1]);
+  const double camera_density = cam.pdf_we(Ray{camera[0].hit.p, d0}).dir * static_cast<double>(cam.pixel_count());
+  if (!(camera_density > 0.0)) return 1.0;
+  double r = 1.0;            // the i = 1 term
+  double compression = 1.0;  // |di_i / di_1| on linearized geometry
+  for (size_t j = 1; j <= last; ++j) {
+    const PathVertex& v = camera[j];
+    const PathVertex& next = camera[j + 1];
+    const Vec3 wo = direction(v, camera[j - 1]);
+    const Vec3 wi = direction(v, next);
+    const Vec3 ng = v.geometric_normal();
+    if (v.bsdf && glm::dot(wo, ng) * glm::dot(wi, ng) < 0.0) {  // a refraction
+      const double eta_b = v.bsdf->eta();
+      const double eta = glm::dot(wo, v.hit.n) > 0 ? eta_b : 1.0 / eta_b;  // eta_wi_side / eta_wo_side
+      Vec3 m = generalized_half_vector(wi, wo, eta, 1.0);
+      if (glm::dot(m, wo) < 0) m = -m;
+      compression *= refraction_solid_angle_ratio(wo, wi, m, eta);
+    }
+    if (v.delta) continue;  // Dirac lobes contribute nothing
+    // Solid-angle pdf of the direction sampled at v: the area density at `next` converted back.
+    double pdf_w = next.pdf_fwd;
+    if (!next.infinite) {
+      const Vec3 dv = next.hit.p - v.hit.p;
+      const double cos_next = std::abs(glm::dot(next.geometric_normal(), glm::normalize(dv)));
+      pdf_w = cos_next > 0.0 ? next.pdf_fwd * glm::dot(dv, dv) / cos_next : 0.0;
+    }
+    // A non-Dirac direction of zero density cannot be bounded: r~ = infinity (no downweighting).
+    if (!(pdf_w > 0.0 && compression > 0.0)) return std::numeric_limits<double>::infinity();
+    r += camera_density / (pdf_w * compression);
+  }
+  return std::isnan(r) ? std::numeric_limits<double>::infinity() : r;
 }
 
 }  // namespace tb::differential

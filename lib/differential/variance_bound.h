@@ -12,9 +12,11 @@
 //    (on planar geometry reflections preserve solid angle).
 #pragma once
 
+#include <span>
 #include <vector>
 
 #include "lib/differential/path_differential.h"
+#include "lib/path/path.h"
 
 namespace tb::differential {
 
@@ -44,5 +46,22 @@ double refraction_solid_angle_ratio(const Vec3& wo, const Vec3& wi, const Vec3& 
 
 // Eq. 21 for a traced path (its vertices, sample flags and pdfs).
 DerivativeFreeRatio variance_ratio_derivative_free(const World& world, const ForwardPath& path);
+
+// Eq. 21 for the camera subpath of a bidirectional technique (lib/path/path.h): camera[0] the lens
+// vertex, camera[1 ..] the surface vertices reached from it, the first `t` of them used (t < 0:
+// all). The sampled directions are those at camera[1 .. t-2] towards camera[2 .. t-1]; their
+// solid-angle pdfs are the stored area densities converted back (pdf_fwd d^2 / |cos| at the
+// receiving vertex), refractions detected from the two directions at the vertex and compressed
+// as in the path-tracer form above. The last camera vertex either lies on an emitter (s = 0) or
+// is connected to a light subpath (s >= 1); the connection and the light subpath are treated as
+// the (virtual) emitter, as Sec. 6.6 does for the vertex that next-event estimation connects:
+// their variance is controlled by the MIS weights, not bounded here. With `mis_reduction` the
+// same holds for an s = 0 path's last direction (towards the emitter, which the s = 1 technique
+// also samples): its term is left out, so the MIS-weighted direct illumination of a vertex is not
+// downweighted (Sec. 6.6). A camera subpath of fewer than three vertices gives r~ = 1; a non-Dirac direction of
+// zero density gives r~ = infinity (nothing bounds it: the stratified target is then f / B). Pinhole
+// cameras only: the aperture term is absent (a lens camera's would be added to the sum).
+double subpath_variance_ratio(const World& world, std::span<const PathVertex> camera, int t, int s,
+                              bool mis_reduction);
 
 }  // namespace tb::differential

@@ -12,6 +12,7 @@
 #include "lib/mcmc/path_space/mlt.h"
 #include "lib/mcmc/path_space/ramlt.h"
 #include "lib/mcmc/pss/msmlt.h"
+#include "lib/mcmc/pss/stratified_pss.h"
 #include "lib/mcmc/pss/pss_driver.h"
 
 namespace tb {
@@ -31,6 +32,13 @@ std::vector<IntegratorParameter> pss_parameters() {
           {"sigma", "small-step standard deviation (default 0.01)"},
           {"resample_levels", "MMLT: 1 draws each chain's path length with its start from the joint bootstrap "
                               "(pbrt-v3), 0 (default) fixes the mutations per length by a pilot bootstrap"}};
+}
+
+std::vector<IntegratorParameter> stratified_parameters() {
+  std::vector<IntegratorParameter> p = pss_parameters();
+  p.push_back({"mis_reduction", "1 (default): an s = 0 path's last direction, MIS-weighted against next-event "
+                                "estimation, is left out of r~ (Zirr & Dachsbacher 2020, Sec. 6.6); 0: counted"});
+  return p;
 }
 
 std::vector<IntegratorParameter> photon_map_parameters(bool progressive) {
@@ -86,6 +94,14 @@ const std::vector<IntegratorInfo>& integrators() {
          ramlt_parameters()},
         {"mmlt", "multiplexed MLT (Hachisuka et al. 2014): primary-sample-space chains per path length over single BDPT techniques",
          [](const World& w, const RenderSettings& s, Film& f) { return render_mmlt(w, s, f); }, pss_parameters()},
+        {"mmlt-stratified", "MMLT with Zirr & Dachsbacher 2020's stratified target min{r~, f / B} (Eq. 8, 21, 22): "
+         "bright low-variance paths capped, bounded-error splats",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_mmlt_stratified(w, s, f); },
+         stratified_parameters()},
+        {"pssmlt-stratified", "PSSMLT over BDPT with Zirr & Dachsbacher 2020's stratified target (sum over splats of "
+         "min{r~, f / B}, Eq. 8, 21, 22)",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_pssmlt_stratified(w, s, f); },
+         stratified_parameters()},
         {"pssmlt", "primary sample space MLT (Kelemen et al. 2002) over BDPT: large and small steps, expected-value splats",
          [](const World& w, const RenderSettings& s, Film& f) { return render_pssmlt(w, s, f); }, pss_parameters()},
         {"pssmlt-pt", "primary sample space MLT (Kelemen et al. 2002) over the path tracer (one NEE+MIS radiance sample per state)",

@@ -39,6 +39,7 @@
 #include "lib/mcmc/pss/pss_driver.h"
 #include "lib/mcmc/pss/pss_kernel.h"
 #include "lib/mcmc/pss/pss_steps.h"
+#include "lib/mcmc/pss/stratified_pss.h"
 #include "lib/path/light_sampler.h"
 #include "validate/chi2/sampler_chi2.h"
 #include "validate/mcmc/broken_variants.h"
@@ -445,14 +446,14 @@ std::shared_ptr<const Film> bdpt_reference(const CornellBox& box, const ImageSiz
   return film;
 }
 
-enum class Variant { kPssmlt, kMmlt, kMsmlt, kPssmltPtRescaled, kPssmltPt, kMsmltMmlt };
+enum class Variant { kPssmlt, kMmlt, kMsmlt, kPssmltPtRescaled, kPssmltPt, kMsmltMmlt, kMmltStratified, kPssmltStratified };
 
 // Negative controls of the image checks, each a wrapper of the real component (broken_pss.h).
 enum class PssFault { kNone, kNoRejectedSplat, kNoTechniqueCount, kSplatThroughput };
 
 CheckResult run_image(const CheckContext& ctx, Variant variant, PssFault fault, const std::string& name,
                       const std::string& scene = "cornell-box.json") {
-  const bool mmlt = variant == Variant::kMmlt || variant == Variant::kMsmltMmlt;
+  const bool mmlt = variant == Variant::kMmlt || variant == Variant::kMsmltMmlt || variant == Variant::kMmltStratified;
   ImageSize sz = image_size(ctx, scene);
   if (fault != PssFault::kNone) sz.spp_pass = std::max<int64_t>(8, sz.spp_pass / 4);  // caught by far
   if (fault == PssFault::kSplatThroughput) sz.spp_pass = std::max<int64_t>(4, sz.spp_pass / 2);  // +700%: by far
@@ -475,6 +476,7 @@ CheckResult run_image(const CheckContext& ctx, Variant variant, PssFault fault, 
   PssStats stats;
   MultiStageSettings ms;
   MultiStageStats ms_stats;
+  double brightness = 0.0;  // B of the stratified variants
   switch (variant) {
     case Variant::kPssmlt: render_pssmlt(*box.world, st, p, film, &stats); break;
     case Variant::kMmlt: render_mmlt(*box.world, st, p, film, &stats); break;
@@ -491,6 +493,15 @@ CheckResult run_image(const CheckContext& ctx, Variant variant, PssFault fault, 
       render_msmlt_mmlt(*box.world, st, p, ms, film, &ms_stats);
       stats = ms_stats.final_stage;
       break;
+    case Variant::kMmltStratified:
+    case Variant::kPssmltStratified: {
+      StratifiedStats ss;
+      if (variant == Variant::kMmltStratified) render_mmlt_stratified(*box.world, st, p, StratifiedSettings{}, film, &ss);
+      else render_pssmlt_stratified(*box.world, st, p, StratifiedSettings{}, film, &ss);
+      stats = ss.pss;
+      brightness = ss.brightness;
+      break;
+    }
   }
   const std::vector<double> visits = expected_visits(ref->mean_image(), N);
   std::vector<bool> mask(visits.size());
@@ -518,6 +529,10 @@ CheckResult run_image(const CheckContext& ctx, Variant variant, PssFault fault, 
                                  {"large", ms_stats.guides.large_acceptance()},
                                  {"small", ms_stats.guides.small_acceptance()}};
     r.message += fmt::format("; guide stages: {} mutations", ms_stats.guides.mutations);
+  }
+  if (variant == Variant::kMmltStratified || variant == Variant::kPssmltStratified) {
+    r.details["brightness_B"] = brightness;
+    r.message += fmt::format("; stratified target, B = {:.4g}", brightness);
   }
   r.details["acceptance"] = {{"large", stats.large_acceptance()}, {"small", stats.small_acceptance()},
                              {"mutations_per_second", stats.mutations_per_second()}};
@@ -655,7 +670,11 @@ const bool registered = [] {
            Image{"render.msmlt.negative_control.splat_throughput", Variant::kMsmlt, PssFault::kSplatThroughput,
                  "multi-stage PSSMLT splatting f / Y(f) instead of f / pi must be rejected"},
            Image{"render.pssmlt_pt_rescaled.cornell.unbiased", Variant::kPssmltPtRescaled, PssFault::kNone,
-                 "PSSMLT over the path tracer with the rescaled small step against BDPT, Welch t-test per pixel"}}) {
+                 "PSSMLT over the path tracer with the rescaled small step against BDPT, Welch t-test per pixel"},
+           Image{"render.mmlt_stratified.negative_control.splat_throughput", Variant::kMmltStratified,
+                 PssFault::kSplatThroughput,
+                 "stratified MMLT (Zirr & Dachsbacher 2020) splatting f / Y(f) instead of the bounded-error f / W~ "
+                 "must be rejected"}}) {
     const std::string name = im.name;
     const Variant variant = im.variant;
     const PssFault fault = im.fault;
@@ -674,8 +693,11 @@ const bool registered = [] {
                                   std::pair{Variant::kMsmlt, "msmlt"},
                                   std::pair{Variant::kPssmltPtRescaled, "pssmlt_pt_rescaled"},
                                   std::pair{Variant::kPssmltPt, "pssmlt_pt"},
-                                  std::pair{Variant::kMsmltMmlt, "msmlt_mmlt"}}) {
-      const bool new_variant = variant == Variant::kPssmltPt || variant == Variant::kMsmltMmlt;
+                                  std::pair{Variant::kMsmltMmlt, "msmlt_mmlt"},
+                                  std::pair{Variant::kMmltStratified, "mmlt_stratified"},
+                                  std::pair{Variant::kPssmltStratified, "pssmlt_stratified"}}) {
+      const bool new_variant = variant == Variant::kPssmltPt || variant == Variant::kMsmltMmlt ||
+                               variant == Variant::kMmltStratified || variant == Variant::kPssmltStratified;
       const std::string scene = checked.key == "cornell-box" ? "cornell" : checked.key;
       if (scene == "cornell" && !new_variant) continue;  // registered above
       const std::string file = checked.file;
