@@ -600,18 +600,6 @@ CheckResult run_visits(const CheckContext& ctx, const std::string& name) {
 // (not checked there; docs/zirr2020.md).
 constexpr double kBrightShareAlpha = 0.01;
 
-double bright_share(const std::vector<double>& visits, const std::vector<Rgb>& image) {
-  std::vector<size_t> order(image.size());
-  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return luminance(image[a]) > luminance(image[b]); });
-  double top = 0.0, all = 0.0;
-  for (size_t k = 0; k < order.size(); ++k) {
-    all += visits[order[k]];
-    if (k < (order.size() + 9) / 10) top += visits[order[k]];
-  }
-  return all > 0.0 ? top / all : 0.0;
-}
-
 // control: a second plain MMLT run (its own seed) in the place of mmlt-stratified, which the
 // margin must reject (the metric does not pass by itself).
 CheckResult run_visits_stratified(const CheckContext& ctx, const std::string& name, const std::string& scene,
@@ -649,8 +637,8 @@ CheckResult run_visits_stratified(const CheckContext& ctx, const std::string& na
     st.seed = hash_values(ctx.seed, hash_string(name), static_cast<uint64_t>(i), uint64_t{1});
     if (control) render_mmlt(*box.world, st, p, b, &strat.pss);
     else render_mmlt_stratified(*box.world, st, p, StratifiedSettings{}, b, &strat);
-    plain_share.add(bright_share(plain.visits, ranking));
-    strat_share.add(bright_share(strat.pss.visits, ranking));
+    plain_share.add(bright_tenth_share(plain.visits, ranking));
+    strat_share.add(bright_tenth_share(strat.pss.visits, ranking));
     cv_plain += plain.visits_cv() / static_cast<double>(passes);
     cv_strat += strat.pss.visits_cv() / static_cast<double>(passes);
     brightness = strat.brightness;
@@ -682,10 +670,10 @@ CheckResult run_visits_stratified(const CheckContext& ctx, const std::string& na
                           "mmlt {:.3f}, {} {:.3f}, msmlt-mmlt {:.3f}; B = {:.4g}",
                           scene, res, res, passes, plain_share.mean(), control ? "second mmlt" : "mmlt-stratified",
                           strat_share.mean(), strat_share.mean() / plain_share.mean(), p_one, kBrightShareAlpha,
-                          bright_share(ms.final_stage.visits, ranking), cv_plain, control ? "second mmlt" : "mmlt-stratified",
+                          bright_tenth_share(ms.final_stage.visits, ranking), cv_plain, control ? "second mmlt" : "mmlt-stratified",
                           cv_strat, ms.final_stage.visits_cv(), brightness);
   r.details = {{"bright_share_mmlt", plain_share.mean()}, {"bright_share_other", strat_share.mean()},
-               {"bright_share_msmlt_mmlt", bright_share(ms.final_stage.visits, ranking)}, {"cv_mmlt", cv_plain},
+               {"bright_share_msmlt_mmlt", bright_tenth_share(ms.final_stage.visits, ranking)}, {"cv_mmlt", cv_plain},
                {"cv_other", cv_strat}, {"cv_msmlt_mmlt", ms.final_stage.visits_cv()}, {"p_one_sided", p_one},
                {"brightness_B", brightness}, {"passes", passes}, {"resolution", res}, {"spp_per_pass", st.spp}};
   return r;

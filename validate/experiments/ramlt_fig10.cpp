@@ -36,19 +36,6 @@ struct SceneCase {
   RamltPerturbation perturbation;
 };
 
-double rrmse(const std::vector<Rgb>& img, const std::vector<Rgb>& ref) {
-  double s = 0.0;
-  int64_t n = 0;
-  for (size_t i = 0; i < img.size(); ++i) {
-    const double r = luminance(ref[i]);
-    if (!(r > 0.0)) continue;
-    const double d = (luminance(img[i]) - r) / r;
-    s += d * d;
-    ++n;
-  }
-  return n > 0 ? std::sqrt(s / static_cast<double>(n)) : std::numeric_limits<double>::quiet_NaN();
-}
-
 ExperimentReport run(const ExperimentContext& ctx) {
   const int res = ctx.full ? 32 : 16;
   const int64_t chains = ctx.full ? 32 : 16;
@@ -122,7 +109,7 @@ ExperimentReport run(const ExperimentContext& ctx) {
           st.seed = hash_values(ctx.seed, hash_string("ramlt-fig10." + sc.file + "." + part), i, rep_i);
           Film film(res, res);
           r = path_space::run_ramlt(*world, st, film, o);
-          const double ei = rrmse(film.mean_image(), ref_img);
+          const double ei = luminance_rrmse(film.mean_image(), ref_img);
           ok = ok && std::isfinite(ei);
           e2 += ei * ei / reps;
           t += std::max(1e-6, r.mlt.seconds) / reps;

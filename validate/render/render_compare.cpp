@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -271,6 +272,31 @@ CheckResult render_error_record(const RenderRun& run, const std::string& what) {
   r.message = fmt::format("{}: {}", what, run.error);
   r.details["render"] = run.summary();
   return r;
+}
+
+double bright_tenth_share(const std::vector<double>& visits, const std::vector<Rgb>& ranking) {
+  std::vector<size_t> order(ranking.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return luminance(ranking[a]) > luminance(ranking[b]); });
+  double top = 0.0, all = 0.0;
+  for (size_t k = 0; k < order.size() && k < visits.size(); ++k) {
+    all += visits[order[k]];
+    if (k < (order.size() + 9) / 10) top += visits[order[k]];
+  }
+  return all > 0.0 ? top / all : 0.0;
+}
+
+double luminance_rrmse(const std::vector<Rgb>& img, const std::vector<Rgb>& ref) {
+  double s = 0.0;
+  int64_t n = 0;
+  for (size_t i = 0; i < img.size() && i < ref.size(); ++i) {
+    const double r = luminance(ref[i]);
+    if (!(r > 0.0)) continue;
+    const double d = (luminance(img[i]) - r) / r;
+    s += d * d;
+    ++n;
+  }
+  return n > 0 ? std::sqrt(s / static_cast<double>(n)) : std::numeric_limits<double>::quiet_NaN();
 }
 
 }  // namespace tb

@@ -39,6 +39,14 @@ RenderRun render_with(const std::string& integrator, const World& world, const R
 
 std::string registered_integrator_names();
 
+// Relative RMSE of an image against a reference, by luminance: sqrt(mean over the pixels with
+// reference luminance > 0 of ((L - L_ref) / L_ref)^2); NaN when no pixel has L_ref > 0.
+double luminance_rrmse(const std::vector<Rgb>& image, const std::vector<Rgb>& reference);
+
+// The share of `visits` (per pixel, e.g. an MCMC run's mutations) that falls in the brightest
+// tenth of the pixels of `ranking` (by luminance; ceil(P / 10) pixels); 0 without visits.
+double bright_tenth_share(const std::vector<double>& visits, const std::vector<Rgb>& ranking);
+
 // The scenes/ folder of the source tree: $TB_SCENES_DIR if set, else the first folder holding
 // scenes/cornell-box.json found going up (at most 4 levels) from this source file's directory,
 // the working directory or the running program's directory, else ./scenes.
