@@ -15,6 +15,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "lib/core/uniforms.h"
 #include "lib/film/film.h"
@@ -40,5 +41,22 @@ int64_t render_pt(const World& world, const RenderSettings& settings, Film& film
 // lens uniforms first, then kDimsPerBounce per vertex (as render_pt draws them). For PSSMLT over
 // the path tracer (lib/mcmc/pss), where u is a primary-sample-space state.
 Rgb pt_sample(const PathContext& ctx, const RenderSettings& settings, const Vec2& raster, Uniforms& u);
+
+// The same sample split into the contributions of its paths (each next-event connection and each
+// emitter hit is one path), with the variance-bounding ratio r~ of each (Zirr & Dachsbacher 2020,
+// Eq. 21 with the MIS reduction of Sec. 6.6, as lib/differential/variance_bound.h
+// subpath_variance_ratio computes it for a bidirectional camera subpath): a connection at vertex
+// x_d (x_1 the first hit) has r~ = 1 + sum over the bounces m = 1..d-1 of p(i_1) / (p(i_m)
+// |di_m / di_1|), an emitter hit at x_d the same sum to m = d - 2 (the direction that found it is
+// MIS-weighted against next-event estimation), so direct illumination and directly seen emitters
+// have r~ = 1. p(i_1) is the camera's solid-angle density per unit raster area (pinhole; a lens
+// camera's aperture term is left out). The values sum to pt_sample's (same uniforms, same order
+// of additions up to rounding). For the stratified target (lib/mcmc/pss/stratified_pss.h).
+struct PathContribution {
+  Rgb value{0.0};
+  double ratio = 1.0;
+};
+void pt_sample_paths(const PathContext& ctx, const RenderSettings& settings, const Vec2& raster, Uniforms& u,
+                     std::vector<PathContribution>* out);
 
 }  // namespace tb

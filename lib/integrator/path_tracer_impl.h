@@ -5,11 +5,14 @@
 
 #include <array>
 #include <atomic>
+#include <limits>
+#include <vector>
 
 #include "estimators/mis_heuristics.h"
 #include "lib/core/rng.h"
 #include "lib/core/sample_dims.h"
 #include "lib/core/uniforms.h"
+#include "lib/differential/variance_bound.h"
 #include "lib/film/film_parallel.h"
 #include "lib/geometry/spawn.h"
 #include "lib/integrator/estimator_terms.h"
@@ -17,6 +20,7 @@
 #include "lib/integrator/path_tracer.h"
 #include "lib/path/light_sampler.h"
 #include "lib/path/scattering.h"
+#include "lib/material/half_vector.h"
 
 namespace tb::detail {
 
@@ -34,6 +38,35 @@ struct BounceUniforms {
   double operator[](BounceDim d) const { return u[static_cast<size_t>(d)]; }
 };
 
+// Records a path tracer's contributions one path at a time with their variance-bounding ratios
+// (pt_sample_paths in path_tracer.h): r_emit applies to emission found at the current vertex,
+// r_nee to its next-event connection.
+struct PathRecorder {
+  std::vector<PathContribution>* out = nullptr;
+  double camera_density = 0.0;  // p(i_1) per unit raster area
+  double r_emit = 1.0, r_nee = 1.0;
+  double compression = 1.0;     // |di_m / di_1|
+  void add(const Rgb& v, double r) const {
+    if (!is_black(v)) out->push_back({v, r});
+  }
+  // After the BSDF sample at a vertex: its term joins the sums of the vertices beyond.
+  void bounce(const SurfacePoint& hit, const Bsdf& bsdf, const Vec3& wo, const Vec3& wi, double pdf, bool delta,
+              bool transmission) {
+    if (transmission) {
+      const double eta_b = bsdf.eta();
+      const double eta = glm::dot(wo, hit.n) > 0 ? eta_b : 1.0 / eta_b;  // eta_wi_side / eta_wo_side
+      Vec3 m = generalized_half_vector(wi, wo, eta, 1.0);
+      if (glm::dot(m, wo) < 0) m = -m;
+      compression *= differential::refraction_solid_angle_ratio(wo, wi, m, eta);
+    }
+    r_emit = r_nee;
+    if (delta) return;
+    const double term = pdf > 0.0 && compression > 0.0 ? camera_density / (pdf * compression)
+                                                       : std::numeric_limits<double>::infinity();
+    r_nee += term;
+  }
+};
+
 template <class Terms>
 class PathTracer {
  public:
@@ -44,8 +77,9 @@ class PathTracer {
   // pbrt-v3 PathIntegrator::Li). U is Uniforms or a final class derived from it (RngUniforms in
   // the render loop), so that next() is a direct, inlined call there. Vertices are lean
   // SurfacePoints: the path tracer never needs the derivatives of a Hit.
+  // With `rec`, every contribution is also recorded as its own path (pt_sample_paths).
   template <class U>
-  Rgb li(Ray ray, U& rng, RayCounts& counts) const {
+  Rgb li(Ray ray, U& rng, RayCounts& counts, PathRecorder* rec = nullptr) const {
     const Scene& scene = world_.geometry();
     Rgb L(0.0), beta(1.0);
     bool count_emission_fully = true;  // camera ray, or the last bounce was a delta lobe
@@ -58,7 +92,9 @@ class PathTracer {
         for (const Light* env : world_.infinite_lights()) {
           const Rgb le = env->le(Vec3(0.0), ray.d);
           if (is_black(le)) continue;
-          L += beta * le * emission_weight(count_emission_fully, prev_pdf_bsdf, env, prev_p, ray.d, nullptr);
+          const Rgb c = beta * le * emission_weight(count_emission_fully, prev_pdf_bsdf, env, prev_p, ray.d, nullptr);
+          L += c;
+          if (rec) rec->add(c, rec->r_emit);
         }
         break;
       }
@@ -66,20 +102,30 @@ class PathTracer {
       const Vec3 wo = -ray.d;
       if (surf.emitter) {
         const Rgb le = surf.emitter->le(hit.n, wo);
-        if (!is_black(le))
-          L += beta * le * emission_weight(count_emission_fully, prev_pdf_bsdf, surf.emitter, prev_p, ray.d, &hit);
+        if (!is_black(le)) {
+          const Rgb c = beta * le * emission_weight(count_emission_fully, prev_pdf_bsdf, surf.emitter, prev_p, ray.d, &hit);
+          L += c;
+          if (rec) rec->add(c, rec->r_emit);
+        }
       }
       if (!surf.bsdf || depth >= st_.max_depth) break;
       const SurfaceScatter scatter(hit, *surf.bsdf);
       const BounceUniforms u(rng);
 
       // Next-event estimation (Veach Eq. 9.12 with the light technique's weight).
-      if (scatter.flags() & (bsdf_flags::kDiffuse | bsdf_flags::kGlossy)) L += beta * direct(scatter, wo, u, counts);
+      if (scatter.flags() & (bsdf_flags::kDiffuse | bsdf_flags::kGlossy)) {
+        const Rgb c = beta * direct(scatter, wo, u, counts);
+        L += c;
+        if (rec) rec->add(c, rec->r_nee);
+      }
 
       // BSDF sampling: extends the path and, when it hits an emitter, is the second technique.
       const auto bs = scatter.sample(wo, u[BounceDim::kBsdfLobe], {u[BounceDim::kBsdfU], u[BounceDim::kBsdfV]},
                                      TransportMode::kRadiance);
       if (!bs || is_black(bs->weight)) break;
+      if (rec)
+        rec->bounce(hit, *surf.bsdf, wo, bs->wi, bs->pdf, bs->is_delta(),
+                    glm::dot(wo, hit.ng) * glm::dot(bs->wi, hit.ng) < 0.0);
       beta *= bs->weight;
       count_emission_fully = bs->is_delta();
       prev_pdf_bsdf = bs->pdf;
@@ -140,6 +186,23 @@ Rgb pt_sample_with(const PathContext& ctx, const RenderSettings& st, const Vec2&
   if (!(cr.weight > 0)) return Rgb(0.0);
   RayCounts rc;
   return cr.weight * pt.li(cr.ray, u, rc);
+}
+
+template <class Terms>
+void pt_sample_paths_with(const PathContext& ctx, const RenderSettings& st, const Vec2& raster, Uniforms& u,
+                          std::vector<PathContribution>* out) {
+  const PathTracer<Terms> pt(*ctx.world, st, *ctx.lights);
+  const Vec2 lens_u = u.next2();  // CameraDim::kLensU, kLensV
+  const Camera& cam = ctx.world->camera();
+  const CameraPrimaryRay cr = cam.generate_primary_ray(raster, lens_u);
+  if (!(cr.weight > 0)) return;
+  const size_t first = out->size();
+  PathRecorder rec;
+  rec.out = out;
+  rec.camera_density = cam.pdf_we(cr.ray).dir * static_cast<double>(cam.pixel_count());
+  RayCounts rc;
+  pt.li(cr.ray, u, rc, &rec);
+  for (size_t i = first; i < out->size(); ++i) (*out)[i].value *= cr.weight;
 }
 
 template <class Terms>

@@ -102,6 +102,14 @@ const std::vector<IntegratorInfo>& integrators() {
          "min{r~, f / B}, Eq. 8, 21, 22)",
          [](const World& w, const RenderSettings& s, Film& f) { return render_pssmlt_stratified(w, s, f); },
          stratified_parameters()},
+        {"pssmlt-pt-stratified", "PSSMLT over the path tracer with Zirr & Dachsbacher 2020's stratified target "
+         "(sum over the sample's paths of min{r~, f / B})",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_pssmlt_pt_stratified(w, s, f); },
+         stratified_parameters()},
+        {"pssmlt-pt-rescaled-stratified", "the rescaled PSSMLT over the path tracer (Szirmay-Kalos & Szecsi 2017) "
+         "with Zirr & Dachsbacher 2020's stratified target",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_pssmlt_pt_rescaled_stratified(w, s, f); },
+         stratified_parameters()},
         {"pssmlt", "primary sample space MLT (Kelemen et al. 2002) over BDPT: large and small steps, expected-value splats",
          [](const World& w, const RenderSettings& s, Film& f) { return render_pssmlt(w, s, f); }, pss_parameters()},
         {"pssmlt-pt", "primary sample space MLT (Kelemen et al. 2002) over the path tracer (one NEE+MIS radiance sample per state)",

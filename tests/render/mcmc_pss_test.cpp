@@ -24,6 +24,7 @@
 #include "lib/mcmc/pss/pss_driver.h"
 #include "lib/mcmc/pss/pss_kernel.h"
 #include "lib/mcmc/pss/pss_steps.h"
+#include "lib/mcmc/pss/stratified_pss.h"
 #include "validate/render/broken_pss.h"
 #include "lib/path/light_sampler.h"
 #include "lib/scene/scene_loader.h"
@@ -641,6 +642,53 @@ TEST(PssRender, SplatsCarryTheirPathToTheTarget) {
   run_pss(f, st, p, film);
   EXPECT_GT(seen.load(), 1000);
   EXPECT_EQ(wrong.load(), 0);
+}
+
+}  // namespace
+}  // namespace tb::pss
+
+namespace tb::pss {
+namespace {
+
+// The path tracer split into paths (pt_paths_sample_function) sums to its single radiance splat
+// on the same state, every ratio is >= 1, direct illumination (and the emitter seen directly)
+// has ratio 1, and paths with a diffuse bounce before their last vertex have ratio > 1.
+TEST(PssStratified, PathTracerSplitSumsToTheRadianceSample) {
+  const auto world = load_scene_at_resolution("cornell-box.json", 16, 16);
+  const LightSampler sampler(*world);
+  const PathContext ctx{world.get(), &sampler};
+  RenderSettings rs;
+  rs.max_depth = 4;
+  const SampleFunction split = pt_paths_sample_function(ctx, rs, 16, 16);
+  const SampleFunction whole = radiance_sample_function(
+      16, 16, [&](const Vec2& r, Uniforms& u) { return pt_sample(ctx, rs, r, u); });
+  int nonzero = 0, above_one = 0, equal_one = 0;
+  std::vector<Splat> a, b;
+  for (uint64_t i = 0; i < 2000; ++i) {
+    PssState s(Rng::for_sample(11, 13, i), kSigma), t(Rng::for_sample(11, 13, i), kSigma);
+    s.restart();
+    t.restart();
+    a.clear();
+    b.clear();
+    split.sample(0, s, &a);
+    whole.sample(0, t, &b);
+    Rgb sum(0.0);
+    for (const Splat& c : a) {
+      sum += c.value;
+      EXPECT_GE(c.ratio, 1.0);
+      above_one += c.ratio > 1.0;
+      equal_one += c.ratio == 1.0;
+      if (!b.empty()) {
+        EXPECT_EQ(c.raster, b[0].raster);
+      }
+    }
+    const double ref = b.empty() ? 0.0 : luminance(b[0].value);
+    EXPECT_NEAR(luminance(sum), ref, 1e-9 * std::max(1.0, ref)) << i;
+    nonzero += ref > 0.0;
+  }
+  EXPECT_GT(nonzero, 500);
+  EXPECT_GT(above_one, 100);
+  EXPECT_GT(equal_one, 100);
 }
 
 }  // namespace

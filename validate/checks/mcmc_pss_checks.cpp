@@ -449,7 +449,8 @@ std::shared_ptr<const Film> bdpt_reference(const CornellBox& box, const ImageSiz
   return film;
 }
 
-enum class Variant { kPssmlt, kMmlt, kMsmlt, kPssmltPtRescaled, kPssmltPt, kMsmltMmlt, kMmltStratified, kPssmltStratified };
+enum class Variant { kPssmlt, kMmlt, kMsmlt, kPssmltPtRescaled, kPssmltPt, kMsmltMmlt, kMmltStratified, kPssmltStratified, kPssmltPtStratified,
+                     kPssmltPtRescaledStratified };
 
 // Negative controls of the image checks, each a wrapper of the real component (broken_pss.h).
 enum class PssFault { kNone, kNoRejectedSplat, kNoTechniqueCount, kSplatThroughput };
@@ -497,10 +498,14 @@ CheckResult run_image(const CheckContext& ctx, Variant variant, PssFault fault, 
       stats = ms_stats.final_stage;
       break;
     case Variant::kMmltStratified:
-    case Variant::kPssmltStratified: {
+    case Variant::kPssmltStratified:
+    case Variant::kPssmltPtStratified:
+    case Variant::kPssmltPtRescaledStratified: {
       StratifiedStats ss;
+      p.rescale.enabled = variant == Variant::kPssmltPtRescaledStratified;
       if (variant == Variant::kMmltStratified) render_mmlt_stratified(*box.world, st, p, StratifiedSettings{}, film, &ss);
-      else render_pssmlt_stratified(*box.world, st, p, StratifiedSettings{}, film, &ss);
+      else if (variant == Variant::kPssmltStratified) render_pssmlt_stratified(*box.world, st, p, StratifiedSettings{}, film, &ss);
+      else render_pssmlt_pt_stratified(*box.world, st, p, StratifiedSettings{}, film, &ss);
       stats = ss.pss;
       brightness = ss.brightness;
       break;
@@ -533,7 +538,8 @@ CheckResult run_image(const CheckContext& ctx, Variant variant, PssFault fault, 
                                  {"small", ms_stats.guides.small_acceptance()}};
     r.message += fmt::format("; guide stages: {} mutations", ms_stats.guides.mutations);
   }
-  if (variant == Variant::kMmltStratified || variant == Variant::kPssmltStratified) {
+  if (variant == Variant::kMmltStratified || variant == Variant::kPssmltStratified ||
+      variant == Variant::kPssmltPtStratified || variant == Variant::kPssmltPtRescaledStratified) {
     r.details["brightness_B"] = brightness;
     r.message += fmt::format("; stratified target, B = {:.4g}", brightness);
   }
@@ -792,9 +798,13 @@ const bool registered = [] {
                                   std::pair{Variant::kPssmltPt, "pssmlt_pt"},
                                   std::pair{Variant::kMsmltMmlt, "msmlt_mmlt"},
                                   std::pair{Variant::kMmltStratified, "mmlt_stratified"},
-                                  std::pair{Variant::kPssmltStratified, "pssmlt_stratified"}}) {
+                                  std::pair{Variant::kPssmltStratified, "pssmlt_stratified"},
+                                  std::pair{Variant::kPssmltPtStratified, "pssmlt_pt_stratified"},
+                                  std::pair{Variant::kPssmltPtRescaledStratified, "pssmlt_pt_rescaled_stratified"}}) {
       const bool new_variant = variant == Variant::kPssmltPt || variant == Variant::kMsmltMmlt ||
-                               variant == Variant::kMmltStratified || variant == Variant::kPssmltStratified;
+                               variant == Variant::kMmltStratified || variant == Variant::kPssmltStratified ||
+                               variant == Variant::kPssmltPtStratified ||
+                               variant == Variant::kPssmltPtRescaledStratified;
       const std::string scene = checked.key == "cornell-box" ? "cornell" : checked.key;
       if (scene == "cornell" && !new_variant) continue;  // registered above
       const std::string file = checked.file;

@@ -1,5 +1,7 @@
 #include "lib/mcmc/pss/pss_sample.h"
 
+#include "lib/integrator/path_tracer.h"
+
 #include <algorithm>
 
 #include "lib/integrator/bdpt.h"
@@ -84,6 +86,26 @@ SampleFunction radiance_sample_function(int width, int height,
     const Vec2 raster = raster_from(u, width, height);
     const Rgb L = radiance(raster, u);
     if (!is_black(L)) out->push_back({raster, L});
+  };
+  return f;
+}
+
+SampleFunction pt_paths_sample_function(const PathContext& ctx, const RenderSettings& settings, int width, int height) {
+  SampleFunction f;
+  f.levels = 1;
+  f.sample = [ctx, settings, width, height](int, StreamUniforms& u, std::vector<Splat>* out) {
+    thread_local std::vector<PathContribution> paths;
+    u.use_stream(kCameraStream);
+    const Vec2 raster = raster_from(u, width, height);
+    paths.clear();
+    pt_sample_paths(ctx, settings, raster, u, &paths);
+    for (const PathContribution& p : paths) {
+      Splat s;
+      s.raster = raster;
+      s.value = p.value;
+      s.ratio = p.ratio;
+      out->push_back(s);
+    }
   };
   return f;
 }

@@ -39,6 +39,9 @@ struct Splat {
   Vec2 raster{0.0};
   Rgb value{0.0};
   SplatPath path{};
+  // > 0: the path's variance-bounding ratio r~, computed by the sample function (the path tracer's
+  // paths keep no vertices; pt_paths_sample_function). 0: none (targets compute it from `path`).
+  double ratio = 0.0;
 };
 
 // A sample function over a discrete level (the path length of MMLT; PSSMLT has one level) and
@@ -70,5 +73,11 @@ SampleFunction mmlt_sample_function(const PathContext& ctx, int width, int heigh
 // tracer: pass pt_sample(ctx, settings, raster, u) of lib/integrator/path_tracer.h.
 SampleFunction radiance_sample_function(int width, int height,
                                         std::function<Rgb(const Vec2& raster, Uniforms& u)> radiance);
+
+// The path tracer with its sample split into paths (lib/integrator/path_tracer.h
+// pt_sample_paths): one splat per next-event connection and per emitter hit, all at the sample's
+// raster, each with its r~ in Splat::ratio. The sum of the splats is radiance_sample_function's
+// single splat over pt_sample.
+SampleFunction pt_paths_sample_function(const PathContext& ctx, const RenderSettings& settings, int width, int height);
 
 }  // namespace tb::pss

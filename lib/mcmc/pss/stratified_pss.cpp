@@ -22,6 +22,7 @@ constexpr int64_t kPilotChunks = 64;  // fixed chunks: sums independent of the t
 }  // namespace
 
 double StratifiedTarget::ratio(const Splat& s) const {
+  if (s.ratio > 0.0) return s.ratio;
   if (s.path.camera == nullptr) return 1.0;
   return differential::subpath_variance_ratio(*world_, *s.path.camera, s.path.t, s.path.s, mis_reduction_);
 }
@@ -103,13 +104,23 @@ int64_t render_pssmlt_stratified(const World& world, const RenderSettings& setti
   return pss::run_stratified(f, world, settings, p, ss, film, stats);
 }
 
+int64_t render_pssmlt_pt_stratified(const World& world, const RenderSettings& settings, const pss::PssSettings& p,
+                                    const pss::StratifiedSettings& ss, Film& film, pss::StratifiedStats* stats) {
+  const LightSampler sampler(world);
+  const PathContext ctx{&world, &sampler};
+  const pss::SampleFunction f = pss::pt_paths_sample_function(ctx, settings, film.width(), film.height());
+  return pss::run_stratified(f, world, settings, p, ss, film, stats);
+}
+
 namespace {
 
 using StratifiedFn = int64_t (*)(const World&, const RenderSettings&, const pss::PssSettings&,
                                  const pss::StratifiedSettings&, Film&, pss::StratifiedStats*);
 
-int64_t render_registered(StratifiedFn fn, const World& world, const RenderSettings& settings, Film& film) {
+int64_t render_registered(StratifiedFn fn, const World& world, const RenderSettings& settings, Film& film,
+                          bool rescaled = false) {
   pss::PssSettings p;
+  p.rescale.enabled = rescaled;
   pss::StratifiedSettings ss;
   std::map<std::string, double> params = settings.params;
   if (auto it = params.find("mis_reduction"); it != params.end()) {
@@ -133,6 +144,14 @@ int64_t render_mmlt_stratified(const World& world, const RenderSettings& setting
 
 int64_t render_pssmlt_stratified(const World& world, const RenderSettings& settings, Film& film) {
   return render_registered(static_cast<StratifiedFn>(render_pssmlt_stratified), world, settings, film);
+}
+
+int64_t render_pssmlt_pt_stratified(const World& world, const RenderSettings& settings, Film& film) {
+  return render_registered(static_cast<StratifiedFn>(render_pssmlt_pt_stratified), world, settings, film);
+}
+
+int64_t render_pssmlt_pt_rescaled_stratified(const World& world, const RenderSettings& settings, Film& film) {
+  return render_registered(static_cast<StratifiedFn>(render_pssmlt_pt_stratified), world, settings, film, true);
 }
 
 }  // namespace tb

@@ -1,6 +1,8 @@
 // Differential-informed stratified MCMC (Zirr & Dachsbacher 2020, Sec. 4.3, 6.1, 6.8) on the
-// primary-sample-space driver (pss_driver.h), over MMLT's per-length techniques (mmlt-stratified)
-// and over BDPT (pssmlt-stratified).
+// primary-sample-space driver (pss_driver.h), over MMLT's per-length techniques (mmlt-stratified),
+// over BDPT (pssmlt-stratified) and over the path tracer with its sample split into paths
+// (pssmlt-pt-stratified, and pssmlt-pt-rescaled-stratified with the rescaled small step; r~ of
+// each path from the path tracer itself, lib/integrator/path_tracer.h pt_sample_paths).
 //
 // The changes to MLT of Sec. 6.1, in the driver's terms. A state's splat c carries the MC estimate
 // v_c of its pixel (its value; Y = luminance) and the path it came from. With the variance-bounding
@@ -83,10 +85,16 @@ namespace tb {
 // The registered renderers (PssSettings from RenderSettings::params, as mmlt and pssmlt).
 int64_t render_mmlt_stratified(const World& world, const RenderSettings& settings, Film& film);
 int64_t render_pssmlt_stratified(const World& world, const RenderSettings& settings, Film& film);
+// Over the path tracer, its sample split into paths (pss_sample.h pt_paths_sample_function), with
+// the plain and with the throughput-rescaled small step (the paper's "rescaled PSSMLT").
+int64_t render_pssmlt_pt_stratified(const World& world, const RenderSettings& settings, Film& film);
+int64_t render_pssmlt_pt_rescaled_stratified(const World& world, const RenderSettings& settings, Film& film);
 // With explicit settings and statistics.
 int64_t render_mmlt_stratified(const World& world, const RenderSettings& settings, const pss::PssSettings& p,
                                const pss::StratifiedSettings& ss, Film& film, pss::StratifiedStats* stats);
 int64_t render_pssmlt_stratified(const World& world, const RenderSettings& settings, const pss::PssSettings& p,
                                  const pss::StratifiedSettings& ss, Film& film, pss::StratifiedStats* stats);
+int64_t render_pssmlt_pt_stratified(const World& world, const RenderSettings& settings, const pss::PssSettings& p,
+                                    const pss::StratifiedSettings& ss, Film& film, pss::StratifiedStats* stats);
 
 }  // namespace tb
