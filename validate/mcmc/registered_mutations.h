@@ -40,9 +40,12 @@ CheckResult pss_registered_mutations_pairwise(const CheckContext& ctx, const std
 // stream's first uniform, never read by the path tracer) against the marginal the mutation STATES.
 // Assumption, checked numerically per test: with the move's reads and scales held fixed, the
 // stated T factorises in coordinate i, i.e. log T(x, y[i <- v]) - log T(x, y[i <- v0]) is the
-// same for 8 proposed backgrounds y (to 1e-9 relative, 16 proposed values v); the marginal is then
-// that 1D factor, normalised over the circle by adaptive Gauss-Kronrod quadrature. A test whose T
-// does not factorise fails the check (reported as such). Histogram: the wrapped displacement
+// same for 8 proposed backgrounds y (to 1e-9 relative, 16 proposed values v). The marginal is then
+// that 1D factor, normalised over the circle by adaptive Gauss-Kronrod quadrature, given that the
+// rest of T integrates over the other coordinates to a constant that does not depend on y_i (not
+// checked: for the registered mutations it is a product of normalised 1D densities in read
+// order, pss_state.h; were it not, the chi-square would reject rather than pass). A test whose T
+// does not factorise fails the check (reported as such, "DOES NOT FACTORISE"). Histogram: the wrapped displacement
 // y_i - x_i in 101 cells of a window from 512 pilot proposals (their range widened by its span on
 // each side; the whole circle if that covers most of it), mass outside as the failure cell.
 // Samples 4e4 per test (quick), 2e5 (full); fixed seeds from ctx.seed and the name; Šidák over
