@@ -1,7 +1,9 @@
 // A new mutation is one class and one registration: registered at run time here, it is picked up
 // by the checks that loop over the registries (validate/mcmc/registered_mutations.h, the functions
-// behind mcmc.pss.cornell.registered_mutations.pairwise, mlt.path_space.registered_mutations.pairwise
+// behind mcmc.pss.cornell.registered_mutations.{pairwise,chi2}, mlt.path_space.registered_mutations.pairwise
 // and mlt.path_space.registered_mutations.flux_bins), and by the renderers' drivers.
+#include <cmath>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -39,6 +41,59 @@ class TrivialIndependentStep final : public pss::PssMutation {
   double err_;
 };
 
+// A small step of its own sigma on D(x) ∩ D(y) (the rescaled step's lazy update with a fixed
+// scale) and sigma0 elsewhere; symmetric. stated_factor != 1 states the density of a step that
+// much wider on D(x) ∩ D(y) (a misstated density; the sampler is unchanged).
+class ToySmallStep final : public pss::PssMutation {
+ public:
+  ToySmallStep(std::string name, double sigma0, double sigma, double stated_factor = 1.0)
+      : name_(std::move(name)), sigma0_(sigma0), sigma_(sigma), stated_(stated_factor) {}
+  std::string name() const override { return name_; }
+  double weight() const override { return 0.1; }
+  bool symmetric() const override { return true; }
+  double scale(double, double) const override { return sigma_; }
+  void begin(pss::PssState& s, double) const override {
+    s.set_rescaled(true);
+    s.start_iteration(false, sigma_);
+  }
+  double log_density(const pss::DenseState& x, const pss::DenseState& y, const pss::PssMove& m) const override {
+    double lp = 0.0;
+    for (size_t i = 0; i < x.size(); ++i) {
+      const size_t j = i / pss::kStreams, st = i % pss::kStreams;
+      const bool both = j < m.reads_x[st] && j < m.reads_y[st];
+      lp += std::log(pss::wrapped_normal_pdf(y[i] - x[i], both ? sigma_ * stated_ : sigma0_));
+    }
+    return lp;
+  }
+
+ private:
+  std::string name_;
+  double sigma0_, sigma_, stated_;
+};
+
+// The fixed small step whose stated density couples coordinates 0 and 1 (does not factorise).
+class CoupledSmallStep final : public pss::PssMutation {
+ public:
+  explicit CoupledSmallStep(double sigma0) : sigma0_(sigma0) {}
+  std::string name() const override { return "test coupled step"; }
+  double weight() const override { return 0.1; }
+  bool symmetric() const override { return true; }
+  double scale(double, double) const override { return sigma0_; }
+  void begin(pss::PssState& s, double) const override {
+    s.set_rescaled(false);
+    s.start_iteration(false);
+  }
+  double log_density(const pss::DenseState& x, const pss::DenseState& y, const pss::PssMove&) const override {
+    double lp = 0.0;
+    for (size_t i = 0; i < x.size(); ++i) lp += std::log(pss::wrapped_normal_pdf(y[i] - x[i], sigma0_));
+    const double d0 = std::remainder(y[0] - x[0], 1.0), d1 = std::remainder(y[1] - x[1], 1.0);
+    return lp + d0 * d1 / (sigma0_ * sigma0_);
+  }
+
+ private:
+  double sigma0_;
+};
+
 CheckContext quick() {
   CheckContext c;
   c.seed = 3;
@@ -66,6 +121,49 @@ TEST(MutationRegistry, NewPssMutationIsPickedUpByTheChecks) {
   ASSERT_TRUE(b.details["mutations"].contains("test misstated step")) << b.message;
   EXPECT_FALSE(b.details["mutations"]["test misstated step"]["passed"].get<bool>()) << b.message;
   EXPECT_FALSE(b.passed);
+}
+
+TEST(MutationRegistry, NewPssMutationIsPickedUpByTheProposalChiSquare) {
+  CheckContext c = quick();
+  c.sample_scale = 0.5;  // 2e4 proposals per test
+  pss::register_pss_mutation({"test small step 0.03", "a small step of sigma 0.03 registered by a test",
+                              [](const pss::PssStepSettings& s) -> std::shared_ptr<const pss::PssMutation> {
+                                return std::make_shared<const ToySmallStep>("test small step 0.03", s.sigma, 0.03);
+                              }});
+  const CheckResult r = pss_registered_mutations_chi2(c, "test.pss.registered.chi2");
+  pss::unregister_pss_mutation("test small step 0.03");
+  ASSERT_TRUE(r.details["mutations"].contains("test small step 0.03")) << r.message;
+  const auto& toy = r.details["mutations"]["test small step 0.03"];
+  EXPECT_EQ(toy["tests"].size(), 6u) << toy.dump(1);  // 3 states x 2 coordinates
+  EXPECT_TRUE(toy["factorises"].get<bool>()) << toy.dump(1);
+  EXPECT_TRUE(toy["passed"].get<bool>()) << toy.dump(1);
+  EXPECT_TRUE(r.passed) << r.message;
+
+  // A toy whose stated density is 10 % too wide (its sampler unchanged) must be rejected, and one
+  // whose stated density does not factorise must be reported as such and fail the check.
+  pss::register_pss_mutation({"test misstated small step", "a misstated small step registered by a test",
+                              [](const pss::PssStepSettings& s) -> std::shared_ptr<const pss::PssMutation> {
+                                return std::make_shared<const ToySmallStep>("test misstated small step", s.sigma, 0.03,
+                                                                            1.1);
+                              }});
+  pss::register_pss_mutation({"test coupled step", "a small step with a non-factorising stated density",
+                              [](const pss::PssStepSettings& s) -> std::shared_ptr<const pss::PssMutation> {
+                                return std::make_shared<const CoupledSmallStep>(s.sigma);
+                              }});
+  const CheckResult b = pss_registered_mutations_chi2(c, "test.pss.registered.chi2.broken");
+  pss::unregister_pss_mutation("test misstated small step");
+  pss::unregister_pss_mutation("test coupled step");
+  ASSERT_TRUE(b.details["mutations"].contains("test misstated small step")) << b.message;
+  EXPECT_TRUE(b.details["mutations"]["test misstated small step"]["rejected"].get<bool>()) << b.message;
+  EXPECT_FALSE(b.details["mutations"]["test misstated small step"]["passed"].get<bool>()) << b.message;
+  ASSERT_TRUE(b.details["mutations"].contains("test coupled step")) << b.message;
+  EXPECT_FALSE(b.details["mutations"]["test coupled step"]["factorises"].get<bool>()) << b.message;
+  EXPECT_FALSE(b.details["mutations"]["test coupled step"]["passed"].get<bool>()) << b.message;
+  EXPECT_NE(b.message.find("DOES NOT FACTORISE"), std::string::npos) << b.message;
+  EXPECT_FALSE(b.passed) << b.message;
+  // The registered mutations themselves still pass in that run.
+  for (const char* m : {"large step", "small step", "rescaled small step"})
+    EXPECT_TRUE(b.details["mutations"][m]["passed"].get<bool>()) << m << ": " << b.message;
 }
 
 TEST(MutationRegistry, NewPathMutationIsPickedUpByTheChecksAndTheDriver) {

@@ -23,6 +23,7 @@
 // render.{pssmlt,mmlt}.negative_control.<defect> (passing when the broken variant IS rejected),
 // mcmc.pss.cornell.{pssmlt,pssmlt_pt}.rescaled_small_step.pairwise, mcmc.pss.negative_control.rescaled_no_ratio.pairwise,
 // render.{msmlt,pssmlt_pt_rescaled}.cornell.unbiased, render.msmlt.negative_control.splat_throughput,
+// mcmc.pss.cornell.registered_mutations.chi2 and its control mcmc.pss.negative_control.registered_mutations_misstated.chi2,
 // render.msmlt.cornell.visits_cv, render.{pssmlt,mmlt,msmlt,pssmlt_pt_rescaled}.{glossy,caustic}.unbiased.
 #include <algorithm>
 #include <map>
@@ -885,6 +886,32 @@ const bool registered = [] {
                                               "ramlt-ajar-door.json", true);
         r.passed = !r.passed;
         r.message = (r.passed ? "broken variant rejected as required: " : "BROKEN VARIANT NOT DETECTED: ") + r.message;
+        return r;
+      }});
+  Registry::global().add(Check{
+      .name = "mcmc.pss.cornell.registered_mutations.chi2",
+      .description = "proposal chi-square of every registered PSS mutation alone, run by the renderer's kernel: "
+                     "marginals of coordinates 0 and 1 at three states against the stated density's 1D factor",
+      .kind = CheckKind::kStatistical,
+      .run = [](const CheckContext& ctx) {
+        return pss_registered_mutations_chi2(ctx, "mcmc.pss.cornell.registered_mutations.chi2");
+      }});
+  // Its negative control: every registered mutation's stated density misstated (MisstatedDensity:
+  // Gaussian steps stated 5 % too wide, tilt 1 + 0.2 (y - 1/2)); each mutation must be rejected.
+  Registry::global().add(Check{
+      .name = "mcmc.pss.negative_control.registered_mutations_misstated.chi2",
+      .description = "the registered-mutations chi-square must reject every registered PSS mutation with its stated "
+                     "density misstated (MisstatedDensity) and its sampler unchanged",
+      .kind = CheckKind::kStatistical,
+      .run = [](const CheckContext& ctx) {
+        CheckResult r = pss_registered_mutations_chi2(
+            ctx, "mcmc.pss.negative_control.registered_mutations_misstated.chi2",
+            [](std::shared_ptr<const PssMutation> m) -> std::shared_ptr<const PssMutation> {
+              return std::make_shared<const MisstatedDensity>(m);
+            });
+        r.passed = r.details.value("every_mutation_rejected", false);
+        r.message = (r.passed ? "broken variant rejected for every mutation as required: "
+                              : "BROKEN VARIANT NOT DETECTED for some mutation: ") + r.message;
         return r;
       }});
   Registry::global().add(Check{

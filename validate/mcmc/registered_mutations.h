@@ -4,8 +4,10 @@
 // space, under flux symmetry by bins (the check that sees a stated T inconsistent with the
 // sampler, which the pairwise check cannot see when it compares the stated T with itself). A
 // mutation registered later, by a researcher or a test, is picked up by the registered checks
-// mcmc.pss.cornell.registered_mutations.pairwise, mlt.path_space.registered_mutations.pairwise and
-// mlt.path_space.registered_mutations.flux_bins, which call these functions.
+// mcmc.pss.cornell.registered_mutations.pairwise, mcmc.pss.cornell.registered_mutations.chi2 (the
+// proposal chi-square of each mutation against its stated density), mlt.path_space.
+// registered_mutations.pairwise and mlt.path_space.registered_mutations.flux_bins, which call
+// these functions.
 #pragma once
 
 #include <functional>
@@ -29,6 +31,28 @@ inline constexpr int kRegisteredCheckMaxDepth = 3;
 using PssMutationWrap = std::function<std::shared_ptr<const pss::PssMutation>(std::shared_ptr<const pss::PssMutation>)>;
 CheckResult pss_registered_mutations_pairwise(const CheckContext& ctx, const std::string& name,
                                               const PssMutationWrap& wrap = {});
+
+// PSS, proposal chi-square (docs/validation.md A, "mutation proposals"; docs/mlt-pss.md): each
+// registered mutation alone, proposed by the renderer's kernel (begin, then the lazy coordinates
+// read through PssState), at three states of the target above (the dimmest, median and brightest
+// of 64 uniform states with pi > 0, so a rescaled step is tested at different sigma(x)); the
+// marginal of coordinate 0 (camera stream, read by every state) and of coordinate 1 (the light
+// stream's first uniform, never read by the path tracer) against the marginal the mutation STATES.
+// Assumption, checked numerically per test: with the move's reads and scales held fixed, the
+// stated T factorises in coordinate i, i.e. log T(x, y[i <- v]) - log T(x, y[i <- v0]) is the
+// same for 8 proposed backgrounds y (to 1e-9 relative, 16 proposed values v). The marginal is then
+// that 1D factor, normalised over the circle by adaptive Gauss-Kronrod quadrature, given that the
+// rest of T integrates over the other coordinates to a constant that does not depend on y_i (not
+// checked: for the registered mutations it is a product of normalised 1D densities in read
+// order, pss_state.h; were it not, the chi-square would reject rather than pass). A test whose T
+// does not factorise fails the check (reported as such, "DOES NOT FACTORISE"). Histogram: the wrapped displacement
+// y_i - x_i in 101 cells of a window from 512 pilot proposals (their range widened by its span on
+// each side; the whole circle if that covers most of it), mass outside as the failure cell.
+// Samples 4e4 per test (quick), 2e5 (full); fixed seeds from ctx.seed and the name; Šidák over
+// all (mutation, state, coordinate) tests at family alpha 1e-3. Details per mutation under
+// "mutations" ("rejected": some test of it rejected), "every_mutation_rejected" for controls.
+CheckResult pss_registered_mutations_chi2(const CheckContext& ctx, const std::string& name,
+                                          const PssMutationWrap& wrap = {});
 
 // Path space: the 16 x 16 Cornell box (max depth 3), BDPT start paths; each mutation's acceptance
 // against its reference density (reference_density_of: the independent assembly for Veach's

@@ -4,11 +4,13 @@
 // them are in validate/checks/mcmc_pss_checks.cpp.
 #pragma once
 
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "lib/mcmc/pss/pss_driver.h"
+#include "lib/mcmc/pss/pss_kernel.h"
 #include "lib/mcmc/pss/pss_mutation.h"
 #include "lib/mcmc/pss/pss_sample.h"
 
@@ -32,6 +34,48 @@ class WithoutProposalRatio final : public PssMutation {
 
  private:
   std::shared_ptr<const PssMutation> m_;
+};
+
+// A mutation whose STATED density T(x -> y) is misstated while its sampler (begin), scales and
+// acceptance ratio are the real ones: the stated density is the real one at the displacement
+// shrunk by `widen` (y_i - x_i wrapped to [-1/2, 1/2), divided by widen), times the tilt
+// prod_i (1 + tilt (y_i - 1/2)). For a wrapped-Gaussian step of sigma the first factor is the
+// density of the step of sigma * widen (Gaussian steps: 5 % too wide at widen = 1.05); the tilt
+// makes the uniform large step's stated density non-uniform, so every registered mutation is
+// misstated. Both factors act coordinate by coordinate, so a factorising T stays factorising.
+// The negative control of the generic proposal chi-square (mcmc.pss.negative_control.
+// registered_mutations_misstated.chi2).
+class MisstatedDensity final : public PssMutation {
+ public:
+  explicit MisstatedDensity(std::shared_ptr<const PssMutation> m, double widen = 1.05, double tilt = 0.2)
+      : m_(std::move(m)), widen_(widen), tilt_(tilt) {}
+  std::string name() const override { return m_->name(); }
+  double weight() const override { return m_->weight(); }
+  bool independent() const override { return m_->independent(); }
+  bool symmetric() const override { return m_->symmetric(); }
+  double scale(double pi, double y_ref) const override { return m_->scale(pi, y_ref); }
+  void begin(PssState& s, double scale_x) const override { m_->begin(s, scale_x); }
+  double log_reverse_over_forward(const PssMove& mv) const override { return m_->log_reverse_over_forward(mv); }
+  double log_density(const DenseState& x, const DenseState& y, const PssMove& mv) const override {
+    DenseState shrunk(y.size());
+    double tilt = 0.0;
+    for (size_t i = 0; i < y.size(); ++i) {
+      double d = y[i] - x[i];
+      d -= std::floor(d + 0.5);  // [-1/2, 1/2)
+      shrunk[i] = wrap01(x[i] + d / widen_);
+      tilt += std::log1p(tilt_ * (y[i] - 0.5));
+    }
+    DenseMove m(x, shrunk);
+    m.reads_x = mv.reads_x;
+    m.reads_y = mv.reads_y;
+    m.sigma_x = mv.sigma_x;
+    m.sigma_y = mv.sigma_y;
+    return m_->log_density(x, shrunk, m) + tilt;
+  }
+
+ private:
+  std::shared_ptr<const PssMutation> m_;
+  double widen_, tilt_;
 };
 
 // The registered mutations of `settings` with `name` wrapped by WithoutProposalRatio.
