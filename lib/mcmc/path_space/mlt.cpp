@@ -33,8 +33,19 @@ MltStats run_mlt(const World& world, const RenderSettings& st, Film& film, const
   const int64_t chains = std::max<int64_t>(1, st.passes);
   const int64_t M = std::max<int64_t>(1, st.spp * P / chains);
   const int64_t n_boot = opt.bootstrap_per_chain > 0 ? opt.bootstrap_per_chain : std::max<int64_t>(256, 4 * P / chains);
+  // A target other than Y(f) (MltTarget), with its default start-up term w_{s,t} pi / p_{s,t}.
+  MltTarget tgt = opt.target ? opt.target(ctx, st) : MltTarget{};
+  const bool custom = static_cast<bool>(tgt.density);
+  if (custom && !tgt.startup)
+    tgt.startup = [&target, &tgt](const Connection& c, const MltPath& x) {
+      const Rgb f = target.contribution(x);
+      const double y = luminance(f);
+      return y > 0.0 ? luminance(c.value) * tgt.density(x, f) / y : 0.0;
+    };
 
   MltStats stats;
+  stats.brightness = tgt.brightness;
+  stats.pilot_samples = tgt.pilot_samples;
   for (int k = 0; k < mixture.components(); ++k) stats.mutations.push_back(MutationStats{mixture.name(k)});
   const auto t0 = std::chrono::steady_clock::now();
   const int64_t batch = 16;  // chains per parallel batch: bounds splat memory, independent of threads
@@ -50,15 +61,17 @@ MltStats run_mlt(const World& world, const RenderSettings& st, Film& film, const
       // Start-up: bootstrap estimate of b and resampling of the start path by Y(contribution).
       Rng stream = Rng::for_sample(st.seed, 0x6d6c7401ULL, chain);
       RngUniforms u(stream);
-      ChainStart start = start_chain(ctx, st.seed, chain, n_boot, max_depth, u.next());
+      ChainStart start = custom ? start_chain(ctx, st.seed, chain, n_boot, max_depth, u.next(), tgt.startup)
+                                : start_chain(ctx, st.seed, chain, n_boot, max_depth, u.next());
       b[ci] = start.b;
       if (!start.x) return;
       MltChain c;
       c.mix = &mixture;
       c.target = &target;
+      if (custom) c.density = &tgt.density;
       c.x = std::move(*start.x);
       c.fx = target.contribution(c.x);
-      c.pix = std::max(0.0, luminance(c.fx));
+      c.pix = c.score(c.x, c.fx);
       c.start();
       auto& ls = local[ci];
       for (int64_t j = 0; j < M; ++j) {
@@ -68,8 +81,13 @@ MltStats run_mlt(const World& world, const RenderSettings& st, Film& film, const
           const bool cur = which == mcmc::Which::kCurrent;
           const double pi = cur ? c.pix : c.piy;
           if (!(pi > 0.0)) return;
-          const auto r = path_raster(ctx, cur ? c.x : *c.y);
-          if (r) splats[ci].splat(*r, (cur ? c.fx : c.fy) * (w / pi), index);
+          const MltPath& p = cur ? c.x : *c.y;
+          const auto r = path_raster(ctx, p);
+          if (!r) return;
+          const Rgb& f = cur ? c.fx : c.fy;
+          // f / pi; for the stratified target f / W~, of luminance S~ (Eq. 8, Sec. 6.1).
+          const double d = tgt.splat_divisor ? tgt.splat_divisor(p, f, pi) : pi;
+          if (d > 0.0) splats[ci].splat(*r, f * (w / d), index);
         });
         if (o.component >= 0) ls[static_cast<size_t>(o.component)].add(o);
       }

@@ -32,9 +32,27 @@
 #include "estimators/mcmc/chain_step.h"
 #include "lib/integrator/render_settings.h"
 #include "lib/mcmc/path_space/path_mutations.h"
+#include "lib/mcmc/path_space/start_paths.h"
 #include "lib/scene/world.h"
 
 namespace tb::path_space {
+
+// A chain target other than Veach's pi = Y(f) (Hoberock & Hart 2010: any pi > 0 wherever f > 0
+// keeps the estimator unbiased). The start-up estimates b = int pi dmu and resamples the start
+// path by pi (start_paths.h, the StartupTerm form), the acceptance uses pi (Hastings ratio of the
+// kernel, unchanged T and mixture terms), and each state splats f / pi with the pass scale
+// P b / M. Built once per run by MltOptions::target (e.g. after a pilot).
+struct MltTarget {
+  std::function<double(const MltPath& x, const Rgb& f)> density;  // pi(x) from x and f(x); required
+  // The start-up term of a connection; empty: w_{s,t} pi(x) / p_{s,t}(x), evaluated as
+  // Y(c.value) pi(x) / Y(f(x)) (BDPT's c.value = w_{s,t} f / p_{s,t}; f with visibility, as the
+  // chain's). Broken variants of validate/ replace it.
+  StartupTerm startup;
+  // The divisor of a state's splat f / d; empty: pi. Broken variants of validate/ replace it.
+  std::function<double(const MltPath& x, const Rgb& f, double pi)> splat_divisor;
+  double brightness = 0.0;    // reported: a brightness the target was built with (0: none)
+  int64_t pilot_samples = 0;  // reported: the samples of its pilot
+};
 
 struct MltOptions {
   // The mutations of the chains, built for the driver's path context; empty: every registered one
@@ -42,6 +60,8 @@ struct MltOptions {
   // wrappers of the registered ones here.
   std::function<PathMutationList(const PathContext&, const PathMutationSettings&)> mutations;
   int64_t bootstrap_per_chain = 0;  // 0: max(256, 4 P / chains)
+  // The chain target, built once for the run's path context and settings; empty: pi = Y(f).
+  std::function<MltTarget(const PathContext&, const RenderSettings&)> target;
 };
 
 struct MutationStats {
@@ -65,7 +85,9 @@ struct MutationStats {
 struct MltStats {
   std::vector<MutationStats> mutations;  // per mutation of the run, in its order
   int64_t chains = 0, mutations_total = 0, chains_without_start = 0;
-  double b_mean = 0.0;      // mean of the chains' b_c
+  double b_mean = 0.0;      // mean of the chains' b_c (of int pi dmu)
+  double brightness = 0.0;  // MltTarget::brightness of the run's target (0: plain target)
+  int64_t pilot_samples = 0;
   double seconds = 0.0;
   double mutations_per_second() const { return seconds > 0 ? mutations_total / seconds : 0.0; }
 };
