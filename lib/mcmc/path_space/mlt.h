@@ -17,6 +17,10 @@
 //    image is unbiased, whatever its length;
 //  - M mutations with expected-value splatting (Veach 1997, Sec. 11.5: x with 1 - a, y with a),
 //    each splat f / Y(f), the pass closed with splat scale P b_c / M.
+// The target is pluggable (MltOptions::target, MltTarget): with a density pi other than Y(f) the
+// start-up estimates int pi dmu (terms w_{s,t} pi / p_{s,t}) and resamples by pi, the acceptance
+// uses pi, and the splats are f / pi (mlt-stratified, stratified_mlt.h). Without one the code
+// path above is unchanged.
 // RenderSettings: spp = mutations per pixel over all chains, passes = number of chains (each
 // chain is one Welch sample of the film, so >= 32 chains give image tests their samples),
 // max_depth + 1 = maximum path length in segments, seed. Chains are seeded by (seed, chain) and
