@@ -13,6 +13,7 @@
 #include "lib/integrator/pass_loop.h"
 #include "lib/mcmc/path_space/mlt_chain.h"
 #include "lib/mcmc/path_space/start_paths.h"
+#include "lib/path/dirac.h"
 
 namespace tb::path_space {
 
@@ -37,8 +38,10 @@ MltStats run_mlt(const World& world, const RenderSettings& st, Film& film, const
   MltTarget tgt = opt.target ? opt.target(ctx, st) : MltTarget{};
   const bool custom = static_cast<bool>(tgt.density);
   if (custom && !tgt.startup)
-    tgt.startup = [&target, &tgt](const Connection& c, const MltPath& x) {
-      const Rgb f = target.contribution(x);
+    tgt.startup = [&ctx, &tgt](const Connection& c, const MltPath& x) {
+      // f of the chain's convention without shadow rays: BDPT's segments are visible by
+      // construction (its connection tested), and c.value > 0 here.
+      const Rgb f = measurement_contribution(ctx, x.v, false, DiracPolicy::kCoefficient);
       const double y = luminance(f);
       return y > 0.0 ? luminance(c.value) * tgt.density(x, f) / y : 0.0;
     };
@@ -56,14 +59,17 @@ MltStats run_mlt(const World& world, const RenderSettings& st, Film& film, const
     std::vector<std::vector<mcmc::ComponentCounts>> local(static_cast<size_t>(count),
                                                           std::vector<mcmc::ComponentCounts>(K));
     std::vector<int64_t> done(static_cast<size_t>(count), 0);
+    std::vector<double> startup_s(static_cast<size_t>(count), 0.0);
     parallel_for(static_cast<size_t>(count), [&](size_t ci) {
       const uint64_t chain = static_cast<uint64_t>(first) + ci;
+      const auto c0 = std::chrono::steady_clock::now();
       // Start-up: bootstrap estimate of b and resampling of the start path by Y(contribution).
       Rng stream = Rng::for_sample(st.seed, 0x6d6c7401ULL, chain);
       RngUniforms u(stream);
       ChainStart start = custom ? start_chain(ctx, st.seed, chain, n_boot, max_depth, u.next(), tgt.startup)
                                 : start_chain(ctx, st.seed, chain, n_boot, max_depth, u.next());
       b[ci] = start.b;
+      startup_s[ci] = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
       if (!start.x) return;
       MltChain c;
       c.mix = &mixture;
@@ -98,6 +104,7 @@ MltStats run_mlt(const World& world, const RenderSettings& st, Film& film, const
       const double scale = static_cast<double>(P) * b[ci] / static_cast<double>(M);
       film.end_pass(splats[ci].entries().empty() ? 0.0 : scale);
       b_sum += b[ci];
+      stats.startup_seconds += startup_s[ci];
       if (done[ci] == 0) ++stats.chains_without_start;
       stats.mutations_total += done[ci];
       for (size_t k = 0; k < K; ++k) {
@@ -122,6 +129,7 @@ void fill_report(const MltStats& stats, RunReport* report) {
   for (const auto& m : stats.mutations) report->mutations.push_back({m.name, m.proposed, m.accepted, m.errors});
   report->mutations_total = stats.mutations_total;
   report->mutations_per_second = stats.mutations_per_second();
+  report->startup_seconds = stats.startup_seconds;
 }
 }  // namespace path_space
 

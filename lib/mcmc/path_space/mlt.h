@@ -92,7 +92,8 @@ struct MltStats {
   double b_mean = 0.0;      // mean of the chains' b_c (of int pi dmu)
   double brightness = 0.0;  // MltTarget::brightness of the run's target (0: plain target)
   int64_t pilot_samples = 0;
-  double seconds = 0.0;
+  double seconds = 0.0;          // wall time of the chains (start-ups included; a target's pilot not)
+  double startup_seconds = 0.0;  // the chains' start-ups, summed over chains (thread time)
   double mutations_per_second() const { return seconds > 0 ? mutations_total / seconds : 0.0; }
 };
 
