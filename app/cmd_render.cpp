@@ -141,6 +141,7 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     rec["mutations"] = m;
     rec["mutations_total"] = report.mutations_total;
     rec["mutations_per_second"] = report.mutations_per_second;
+    if (report.startup_seconds > 0) rec["startup_seconds"] = report.startup_seconds;
   }
   if (ramlt_maps) {
     const std::string base = std::filesystem::path(a.out).replace_extension("").string();

@@ -23,6 +23,7 @@ struct RunReport {
   std::vector<MutationReport> mutations;
   int64_t mutations_total = 0;
   double mutations_per_second = 0.0;
+  double startup_seconds = 0.0;  // path-space MLT: its chains' start-ups, summed over chains (0: not reported)
 };
 
 struct RenderSettings {

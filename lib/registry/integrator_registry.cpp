@@ -11,6 +11,7 @@
 #include "lib/mcmc/path_space/hslt_mutation.h"
 #include "lib/mcmc/path_space/mlt.h"
 #include "lib/mcmc/path_space/ramlt.h"
+#include "lib/mcmc/path_space/stratified_mlt.h"
 #include "lib/mcmc/pss/msmlt.h"
 #include "lib/mcmc/pss/stratified_pss.h"
 #include "lib/mcmc/pss/pss_driver.h"
@@ -39,6 +40,13 @@ std::vector<IntegratorParameter> stratified_parameters() {
   p.push_back({"mis_reduction", "1 (default): an s = 0 path's last direction, MIS-weighted against next-event "
                                 "estimation, is left out of r~ (Zirr & Dachsbacher 2020, Sec. 6.6); 0: counted"});
   return p;
+}
+
+std::vector<IntegratorParameter> mlt_stratified_parameters() {
+  return {{"mis_reduction", "1 (default): the last direction of a path read from the camera (towards the emitter, "
+                            "MIS-weighted against next-event estimation) is left out of r~ (Zirr & Dachsbacher "
+                            "2020, Sec. 6.6); 0: counted"},
+          {"pilot", "BDPT samples of the pilot that estimates the brightness B (0, default: max(1024, pixels))"}};
 }
 
 std::vector<IntegratorParameter> photon_map_parameters(bool progressive) {
@@ -78,6 +86,10 @@ const std::vector<IntegratorInfo>& integrators() {
         {"hslt", "path-space MLT with the half-vector mutation (Kaplanyan et al. 2014) mixed with the bidirectional mutation (pinhole)", render_hslt, {{"gamma", "half-vector step scale of Sec. 6.1 (default 0.1)"}, {"stratify", "1: Sec. 6.2-6.3 step sizes (default), 0: BSDF steps only"}}},
         {"mlt", "Veach's path-space MLT: bidirectional mutation, lens and caustic perturbations through specular chains (pinhole)",
          [](const World& w, const RenderSettings& s, Film& f) { return render_mlt(w, s, f); }},
+        {"mlt-stratified", "Veach's path-space MLT with Zirr & Dachsbacher 2020's stratified target "
+         "min{r~ p, f / B} (Eq. 8, 21, 22): bright low-variance paths capped, bounded-error splats (pinhole)",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_mlt_stratified(w, s, f); },
+         mlt_stratified_parameters()},
         {"ramlt-lens", "regional adaptive MLT (Otsu et al.): bidirectional mutation + regional adaptive lens "
          "perturbation, 20 x 20 screen grid, adapted in synchronous batches (pinhole; tb render --partition)",
          [](const World& w, const RenderSettings& s, Film& f) {

@@ -25,6 +25,11 @@
 //  - mlt.path_space.study.caustic_16: registered only when TB_MLT_STUDY_SEEDS is set (opt-in
 //    measurement, not a test): the 16 x 16 caustic comparison per seed with and without low-visit
 //    masks and the between-seed pooled means of the low-visit pixels (docs/mlt-path-space.md);
+//  - render.mlt_stratified.{cornell,glossy,caustic}.unbiased: the image checks image.cornell,
+//    image.glossy and image.caustic_grouped with mlt-stratified's target (stratified_mlt.h),
+//    against the same BDPT references, and
+//    its negative controls (validate/mcmc/path_space/broken_stratified_mlt.h): the splat f / Y(f)
+//    with the stratified target, and b of Y(f) instead of W~;
 //  - negative controls, passing when the broken variant IS rejected: the lens perturbation with
 //    its T ratio dropped (pairwise), the bidirectional density without a geometry term (pairwise,
 //    chi-square, net flux and image), the mixture accepting with pi(y) / pi(x) only (pairwise), the
@@ -44,8 +49,10 @@
 #include "lib/core/hash.h"
 #include "lib/integrator/bdpt.h"
 #include "lib/mcmc/pss/pss_driver.h"
+#include "validate/mcmc/path_space/broken_stratified_mlt.h"
 #include "validate/mcmc/path_space/flux_bins.h"
 #include "lib/mcmc/path_space/mlt.h"
+#include "lib/mcmc/path_space/stratified_mlt.h"
 #include "validate/mcmc/path_space/net_flux.h"
 #include "validate/mcmc/path_space/proposal_projections.h"
 #include "validate/mcmc/path_space/reference_density.h"
@@ -516,6 +523,10 @@ CheckResult image_record(const ChannelCompare& c, const MltStats& s, const std::
   res.details = c.details();
   res.details["mutations_per_second"] = s.mutations_per_second();
   for (const auto& m : s.mutations) res.details["acceptance_" + m.name] = m.acceptance_rate();
+  if (s.brightness > 0.0) {  // a stratified target: its B and the chains' mean normalisation
+    res.details["brightness"] = s.brightness;
+    res.details["b_mean"] = s.b_mean;
+  }
   return res;
 }
 
@@ -957,6 +968,54 @@ const bool registered = [] {
       "Negative control: the way chi-square must reject a bidirectional density without the geometry term",
       CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) {
         return negate(bidir_chi2(BidirFault::kMissingGeometryTerm, cx, n));
+      });
+
+  // ---- mlt-stratified (lib/mcmc/path_space/stratified_mlt.h): the same image checks with the
+  // stratified target W~ = min{ r~ p, Y(f) / B } (Zirr & Dachsbacher 2020, Eq. 8, 21, 22);
+  // any W~ > 0 where f > 0 leaves each chain's image unbiased, so the BDPT reference is the same.
+  const auto stratified = [](int64_t bootstrap = 0) {
+    MltOptions o;
+    o.bootstrap_per_chain = bootstrap;
+    o.target = [](const PathContext& ctx, const RenderSettings& st) { return stratified_mlt_target(ctx, st, {}); };
+    return o;
+  };
+  const std::string q = "render.mlt_stratified.";
+  add(q + "cornell.unbiased",
+      "mlt-stratified (>= 48 chains as Welch samples) against BDPT on the 8 x 8 Cornell box (per pixel-channel Welch "
+      "t, Šidák, Stouffer, sum z^2; alpha = 1e-5)",
+      CheckKind::kStatistical,
+      [stratified](const CheckContext& cx, const std::string& n) { return image_check(stratified(), cx, n); });
+  add(q + "glossy.unbiased",
+      "mlt-stratified against BDPT on the 16 x 16 glossy scene at depth 8, sums over pixel groups holding >= 16 "
+      "expected plain-MLT chain starts each (>= 1024 chains as Welch samples; alpha = 1e-5)",
+      CheckKind::kStatistical, [stratified](const CheckContext& cx, const std::string& n) {
+        return grouped_image_check(stratified(), cx, n, "glossy.json", 4096);
+      });
+  // The caustic scene is compared over pixel groups only: per pixel at 8 x 8 (image_check) the
+  // stratified chains' images are correlated across pixels (a chain's share of mutations in the
+  // uncapped regions, W~ = r~ p, varies between chains), which makes the Stouffer and sum z^2
+  // aggregations over pixels anti-conservative there: 4 of 15 seeds rejected at 48 chains and 4 of
+  // 15 at 192 (docs/zirr2020.md, "Stratified Veach MLT"). Over groups, with the default 256
+  // start-up samples per chain, b~'s rare large terms (w W~ / p up to Y(c.value) / B on bright
+  // paths of large r~) still shifted all groups together on 1 of 15 seeds (p = 1.9e-12, Stouffer);
+  // 2048 start-up samples per chain average them within each chain.
+  add(q + "caustic.unbiased",
+      "mlt-stratified against BDPT on the 16 x 16 caustic scene at depth 10, sums over pixel groups holding >= 16 "
+      "expected plain-MLT chain starts each (>= 1024 chains as Welch samples; alpha = 1e-5)",
+      CheckKind::kStatistical, [stratified](const CheckContext& cx, const std::string& n) {
+        return grouped_image_check(stratified(2048), cx, n, "caustic.json", 1024);
+      });
+  add(q + "negative_control.plain_splat",
+      "Negative control: the Cornell-box image check must reject mlt-stratified splatting f / Y(f) (W~ forgotten in "
+      "the splat)",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) {
+        return negate(image_check(stratified_with_plain_splat(), cx, n));
+      });
+  add(q + "negative_control.plain_normalisation",
+      "Negative control: the Cornell-box image check must reject mlt-stratified normalised (and started) by the "
+      "start-up of Y(f) instead of W~",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) {
+        return negate(image_check(stratified_with_plain_normalisation(), cx, n));
       });
   return true;
 }();

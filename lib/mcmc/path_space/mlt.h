@@ -17,6 +17,10 @@
 //    image is unbiased, whatever its length;
 //  - M mutations with expected-value splatting (Veach 1997, Sec. 11.5: x with 1 - a, y with a),
 //    each splat f / Y(f), the pass closed with splat scale P b_c / M.
+// The target is pluggable (MltOptions::target, MltTarget): with a density pi other than Y(f) the
+// start-up estimates int pi dmu (terms w_{s,t} pi / p_{s,t}) and resamples by pi, the acceptance
+// uses pi, and the splats are f / pi (mlt-stratified, stratified_mlt.h). Without one the code
+// path above is unchanged.
 // RenderSettings: spp = mutations per pixel over all chains, passes = number of chains (each
 // chain is one Welch sample of the film, so >= 32 chains give image tests their samples),
 // max_depth + 1 = maximum path length in segments, seed. Chains are seeded by (seed, chain) and
@@ -32,9 +36,27 @@
 #include "estimators/mcmc/chain_step.h"
 #include "lib/integrator/render_settings.h"
 #include "lib/mcmc/path_space/path_mutations.h"
+#include "lib/mcmc/path_space/start_paths.h"
 #include "lib/scene/world.h"
 
 namespace tb::path_space {
+
+// A chain target other than Veach's pi = Y(f) (Hoberock & Hart 2010: any pi > 0 wherever f > 0
+// keeps the estimator unbiased). The start-up estimates b = int pi dmu and resamples the start
+// path by pi (start_paths.h, the StartupTerm form), the acceptance uses pi (Hastings ratio of the
+// kernel, unchanged T and mixture terms), and each state splats f / pi with the pass scale
+// P b / M. Built once per run by MltOptions::target (e.g. after a pilot).
+struct MltTarget {
+  std::function<double(const MltPath& x, const Rgb& f)> density;  // pi(x) from x and f(x); required
+  // The start-up term of a connection; empty: w_{s,t} pi(x) / p_{s,t}(x), evaluated as
+  // Y(c.value) pi(x) / Y(f(x)) (BDPT's c.value = w_{s,t} f / p_{s,t}; f with visibility, as the
+  // chain's). Broken variants of validate/ replace it.
+  StartupTerm startup;
+  // The divisor of a state's splat f / d; empty: pi. Broken variants of validate/ replace it.
+  std::function<double(const MltPath& x, const Rgb& f, double pi)> splat_divisor;
+  double brightness = 0.0;    // reported: a brightness the target was built with (0: none)
+  int64_t pilot_samples = 0;  // reported: the samples of its pilot
+};
 
 struct MltOptions {
   // The mutations of the chains, built for the driver's path context; empty: every registered one
@@ -42,6 +64,8 @@ struct MltOptions {
   // wrappers of the registered ones here.
   std::function<PathMutationList(const PathContext&, const PathMutationSettings&)> mutations;
   int64_t bootstrap_per_chain = 0;  // 0: max(256, 4 P / chains)
+  // The chain target, built once for the run's path context and settings; empty: pi = Y(f).
+  std::function<MltTarget(const PathContext&, const RenderSettings&)> target;
 };
 
 struct MutationStats {
@@ -65,8 +89,11 @@ struct MutationStats {
 struct MltStats {
   std::vector<MutationStats> mutations;  // per mutation of the run, in its order
   int64_t chains = 0, mutations_total = 0, chains_without_start = 0;
-  double b_mean = 0.0;      // mean of the chains' b_c
-  double seconds = 0.0;
+  double b_mean = 0.0;      // mean of the chains' b_c (of int pi dmu)
+  double brightness = 0.0;  // MltTarget::brightness of the run's target (0: plain target)
+  int64_t pilot_samples = 0;
+  double seconds = 0.0;          // wall time of the chains (start-ups included; a target's pilot not)
+  double startup_seconds = 0.0;  // the chains' start-ups, summed over chains (thread time)
   double mutations_per_second() const { return seconds > 0 ? mutations_total / seconds : 0.0; }
 };
 

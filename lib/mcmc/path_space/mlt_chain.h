@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -14,11 +15,13 @@
 
 namespace tb::path_space {
 
-// One chain on paths as the ScoredChain of chain_step.h: x with f(x) and pi(x) = Y(f(x)) cached,
-// the proposal y scored once when proposed.
+// One chain on paths as the ScoredChain of chain_step.h: x with f(x) and pi(x) cached, the proposal
+// y scored once when proposed. pi(x) = Y(f(x)) unless `density` is set (a target of
+// mlt.h: MltTarget, given the path and its f).
 struct MltChain {
   const PathMixture* mix = nullptr;
   const PathTarget* target = nullptr;
+  const std::function<double(const MltPath&, const Rgb&)>* density = nullptr;
   MltPath x;
   Rgb fx{0.0};
   double pix = 0.0;
@@ -37,8 +40,11 @@ struct MltChain {
     y = mix->propose(k, x, u);
     if (!y) return false;
     fy = target->contribution(*y);
-    piy = std::max(0.0, luminance(fy));
+    piy = score(*y, fy);
     return true;
+  }
+  double score(const MltPath& p, const Rgb& f) const {
+    return density ? std::max(0.0, (*density)(p, f)) : std::max(0.0, luminance(f));
   }
   // mcmc::mixture_terms with c_k(x) from the cache and c_k(y) from y's weights (kept for accept).
   mcmc::MoveTerms terms(int k) {

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
+#include "lib/core/parallel.h"
 #include "lib/path/dirac.h"
 
 namespace tb::path_space {
@@ -48,11 +50,11 @@ std::optional<MltPath> sample_bdpt_path(const PathContext& ctx, Uniforms& u, int
 
 namespace {
 
-// Replays bootstrap sample `index` of a chain: camera and light subpaths and the connections in
-// a fixed order; calls visit(s, t, connection, light, camera) until it returns false.
+// Replays BDPT sample `index` of stream key `key`: camera and light subpaths and the connections
+// in a fixed order; calls visit(s, t, connection, light, camera) until it returns false.
 template <class F>
-void bootstrap_sample(const PathContext& ctx, uint64_t seed, uint64_t chain, uint64_t index, int max_depth, F&& visit) {
-  Rng stream = Rng::for_sample(seed, 0x6d6c7400ULL + chain, index);  // key: "mlt" and the chain
+void keyed_bdpt_sample(const PathContext& ctx, uint64_t seed, uint64_t key, uint64_t index, int max_depth, F&& visit) {
+  Rng stream = Rng::for_sample(seed, key, index);
   RngUniforms rng(stream);
   const Camera& cam = ctx.world->camera();
   const Vec2 u_film = rng.next2(), lens_u = rng.next2();
@@ -67,6 +69,14 @@ void bootstrap_sample(const PathContext& ctx, uint64_t seed, uint64_t chain, uin
       if (!visit(s, t, c, lp, cp)) return;
     }
 }
+
+// Bootstrap sample `index` of a chain (key: "mlt" and the chain).
+template <class F>
+void bootstrap_sample(const PathContext& ctx, uint64_t seed, uint64_t chain, uint64_t index, int max_depth, F&& visit) {
+  keyed_bdpt_sample(ctx, seed, 0x6d6c7400ULL + chain, index, max_depth, std::forward<F>(visit));
+}
+
+constexpr int64_t kBrightnessChunks = 64;  // fixed chunks: sums independent of the thread count
 
 struct Candidate {
   uint64_t sample = 0;
@@ -110,6 +120,64 @@ ChainStart start_chain(const PathContext& ctx, uint64_t seed, uint64_t chain, in
                      return false;
                    });
   return start;
+}
+
+ChainStart start_chain(const PathContext& ctx, uint64_t seed, uint64_t chain, int64_t n_boot, int max_depth,
+                       double pick, const StartupTerm& term) {
+  std::vector<Candidate> cands;
+  double sum = 0.0;
+  for (int64_t i = 0; i < n_boot; ++i)
+    bootstrap_sample(ctx, seed, chain, static_cast<uint64_t>(i), max_depth,
+                     [&](int s, int t, const Connection& c, const auto& lp, const auto& cp) {
+                       if (!(luminance(c.value) > 0.0)) return true;
+                       const double w = term(c, assemble_connection(lp, cp, s, t, c));
+                       if (w > 0.0 && std::isfinite(w)) {
+                         sum += w;
+                         cands.push_back({static_cast<uint64_t>(i), s, t, w});
+                       }
+                       return true;
+                     });
+  ChainStart start;
+  start.b = sum / static_cast<double>(std::max<int64_t>(1, n_boot));
+  if (cands.empty()) return start;
+  const double target = pick * sum;
+  double acc = 0.0;
+  const Candidate* chosen = &cands.back();
+  for (const auto& c : cands) {
+    acc += c.weight;
+    if (target < acc) {
+      chosen = &c;
+      break;
+    }
+  }
+  bootstrap_sample(ctx, seed, chain, chosen->sample, max_depth,
+                   [&](int s, int t, const Connection& c, const auto& lp, const auto& cp) {
+                     if (s != chosen->s || t != chosen->t) return true;
+                     start.x = assemble_connection(lp, cp, s, t, c);
+                     return false;
+                   });
+  return start;
+}
+
+double bdpt_brightness(const PathContext& ctx, uint64_t seed, uint64_t key, int64_t n, int max_depth) {
+  if (n <= 0) return 0.0;
+  std::vector<double> sum(static_cast<size_t>(kBrightnessChunks), 0.0);
+  parallel_for(static_cast<size_t>(kBrightnessChunks), [&](size_t chunk) {
+    const int64_t lo = n * static_cast<int64_t>(chunk) / kBrightnessChunks;
+    const int64_t hi = n * static_cast<int64_t>(chunk + 1) / kBrightnessChunks;
+    double acc = 0.0;
+    for (int64_t i = lo; i < hi; ++i)
+      keyed_bdpt_sample(ctx, seed, key, static_cast<uint64_t>(i), max_depth,
+                        [&](int, int, const Connection& c, const auto&, const auto&) {
+                          const double w = luminance(c.value);
+                          if (w > 0.0 && std::isfinite(w)) acc += w;
+                          return true;
+                        });
+    sum[chunk] = acc;
+  });
+  double total = 0.0;
+  for (double v : sum) total += v;
+  return total / static_cast<double>(n);
 }
 
 }  // namespace tb::path_space

@@ -3,6 +3,7 @@
 // of the detailed-balance checks.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -36,5 +37,21 @@ struct ChainStart {
 };
 ChainStart start_chain(const PathContext& ctx, uint64_t seed, uint64_t chain, int64_t n_boot, int max_depth,
                        double pick);
+
+// The start-up for a chain target pi other than Y(f) (Veach 1997, Sec. 11.3.1 with Y(f) replaced
+// by pi; Hoberock & Hart 2010): `term(c, x)` is connection c's term, for the assembled path x, of
+// an unbiased estimate of int pi dmu summed over a sample's connections (for BDPT's MIS weights
+// w_{s,t}: w_{s,t}(x) pi(x) / p_{s,t}(x)); b = mean over the n_boot samples of the summed terms,
+// x resampled among all connections with a positive term proportionally to it. Then
+// E[b g(x)] = int g pi dmu for every g. Same streams as the plain start-up above; only
+// connections with a positive weighted contribution are offered to `term`.
+using StartupTerm = std::function<double(const Connection& c, const MltPath& x)>;
+ChainStart start_chain(const PathContext& ctx, uint64_t seed, uint64_t chain, int64_t n_boot, int max_depth,
+                       double pick, const StartupTerm& term);
+
+// Mean over n BDPT samples (uniform raster positions, streams (seed, key, i), i < n) of
+// sum_{s,t} Y(weighted contribution): the start-up's unbiased estimate of int Y(f) dmu, from
+// streams of the caller's key. Summed in fixed chunks: the same value for any thread count.
+double bdpt_brightness(const PathContext& ctx, uint64_t seed, uint64_t key, int64_t n, int max_depth);
 
 }  // namespace tb::path_space
