@@ -84,22 +84,10 @@ struct Candidate {
   double weight = 0.0;
 };
 
-}  // namespace
-
-ChainStart start_chain(const PathContext& ctx, uint64_t seed, uint64_t chain, int64_t n_boot, int max_depth,
-                       double pick) {
-  std::vector<Candidate> cands;
-  double sum = 0.0;
-  for (int64_t i = 0; i < n_boot; ++i)
-    bootstrap_sample(ctx, seed, chain, static_cast<uint64_t>(i), max_depth,
-                     [&](int s, int t, const Connection& c, const auto&, const auto&) {
-                       const double w = luminance(c.value);
-                       if (w > 0.0 && std::isfinite(w)) {
-                         sum += w;
-                         cands.push_back({static_cast<uint64_t>(i), s, t, w});
-                       }
-                       return true;
-                     });
+// b = sum / n_boot and the start path: the candidate connection drawn with probability weight /
+// sum by the uniform `pick`, re-traced from its bootstrap sample (shared by both start_chain forms).
+ChainStart resample_start(const PathContext& ctx, uint64_t seed, uint64_t chain, int64_t n_boot, int max_depth,
+                          double pick, const std::vector<Candidate>& cands, double sum) {
   ChainStart start;
   start.b = sum / static_cast<double>(std::max<int64_t>(1, n_boot));
   if (cands.empty()) return start;
@@ -122,6 +110,25 @@ ChainStart start_chain(const PathContext& ctx, uint64_t seed, uint64_t chain, in
   return start;
 }
 
+}  // namespace
+
+ChainStart start_chain(const PathContext& ctx, uint64_t seed, uint64_t chain, int64_t n_boot, int max_depth,
+                       double pick) {
+  std::vector<Candidate> cands;
+  double sum = 0.0;
+  for (int64_t i = 0; i < n_boot; ++i)
+    bootstrap_sample(ctx, seed, chain, static_cast<uint64_t>(i), max_depth,
+                     [&](int s, int t, const Connection& c, const auto&, const auto&) {
+                       const double w = luminance(c.value);
+                       if (w > 0.0 && std::isfinite(w)) {
+                         sum += w;
+                         cands.push_back({static_cast<uint64_t>(i), s, t, w});
+                       }
+                       return true;
+                     });
+  return resample_start(ctx, seed, chain, n_boot, max_depth, pick, cands, sum);
+}
+
 ChainStart start_chain(const PathContext& ctx, uint64_t seed, uint64_t chain, int64_t n_boot, int max_depth,
                        double pick, const StartupTerm& term) {
   std::vector<Candidate> cands;
@@ -137,26 +144,7 @@ ChainStart start_chain(const PathContext& ctx, uint64_t seed, uint64_t chain, in
                        }
                        return true;
                      });
-  ChainStart start;
-  start.b = sum / static_cast<double>(std::max<int64_t>(1, n_boot));
-  if (cands.empty()) return start;
-  const double target = pick * sum;
-  double acc = 0.0;
-  const Candidate* chosen = &cands.back();
-  for (const auto& c : cands) {
-    acc += c.weight;
-    if (target < acc) {
-      chosen = &c;
-      break;
-    }
-  }
-  bootstrap_sample(ctx, seed, chain, chosen->sample, max_depth,
-                   [&](int s, int t, const Connection& c, const auto& lp, const auto& cp) {
-                     if (s != chosen->s || t != chosen->t) return true;
-                     start.x = assemble_connection(lp, cp, s, t, c);
-                     return false;
-                   });
-  return start;
+  return resample_start(ctx, seed, chain, n_boot, max_depth, pick, cands, sum);
 }
 
 double bdpt_brightness(const PathContext& ctx, uint64_t seed, uint64_t key, int64_t n, int max_depth) {
