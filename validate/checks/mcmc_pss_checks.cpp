@@ -778,7 +778,11 @@ const bool registered = [] {
            Image{"render.mmlt_stratified.negative_control.splat_throughput", Variant::kMmltStratified,
                  PssFault::kSplatThroughput,
                  "stratified MMLT (Zirr & Dachsbacher 2020) splatting f / Y(f) instead of the bounded-error f / W~ "
-                 "must be rejected"}}) {
+                 "must be rejected"},
+           Image{"render.pssmlt_pt_stratified.negative_control.splat_throughput", Variant::kPssmltPtStratified,
+                 PssFault::kSplatThroughput,
+                 "stratified PSSMLT over the path tracer (its sample split into paths) splatting f / Y(f) instead of "
+                 "f / W~ must be rejected"}}) {
     const std::string name = im.name;
     const Variant variant = im.variant;
     const PssFault fault = im.fault;
