@@ -6,7 +6,8 @@
 //  - image unbiasedness of PSSMLT and MMLT against BDPT: Welch's t-test per pixel and channel
 //    over independent passes (each pass its own bootstrap and chains: a Welch sample),
 //    compare_channels at alpha = 0.01, over the pixels the chains visit at least 32 times per pass
-//    in expectation (pss::expected_visits; the others have far-from-normal Welch samples);
+//    in expectation (pss::expected_visits; the others have far-from-normal Welch samples), and for
+//    the stratified targets also 32 effective visits of their own target (pss::effective_visits);
 //  - negative controls that must be rejected: expected-value splatting without the (1 - a) splat
 //    of the current state (PSSMLT), and MMLT without the technique count k + 1.
 //  - the lazily updated small step against its stated density (chi-square), with a misstated-
