@@ -650,6 +650,58 @@ TEST(PssRender, SplatsCarryTheirPathToTheTarget) {
 namespace tb::pss {
 namespace {
 
+// effective_visits on synthetic sample functions (one splat per state, raster uniform over the
+// image). Plain target: n_j = N Y_j / b, so the n_j of a single-pixel-per-state target sum to N
+// exactly (the pilot's own estimates cancel) and agree with expected_visits of the exact image.
+TEST(PssEffectiveVisits, PlainTargetIsExpectedVisits) {
+  constexpr int kW = 4, kH = 2;
+  SampleFunction f;
+  f.sample = [](int, StreamUniforms& u, std::vector<Splat>* out) {
+    u.use_stream(kCameraStream);
+    const Vec2 r{u.next() * kW, u.next() * kH};
+    const double y = 1.0 + std::floor(r.x) + 2.0 * std::floor(r.y);  // constant per pixel
+    out->push_back({r, Rgb(y)});
+  };
+  const int64_t N = 8192;
+  const std::vector<double> n = effective_visits(f, {}, kW, kH, N, 1 << 16, 3);
+  std::vector<Rgb> image(kW * kH);
+  for (int j = 0; j < kW * kH; ++j) image[static_cast<size_t>(j)] = Rgb(1.0 + (j % kW) + 2.0 * (j / kW));
+  const std::vector<double> ev = expected_visits(image, N);
+  double sum = 0.0;
+  for (size_t j = 0; j < n.size(); ++j) {
+    sum += n[j];
+    EXPECT_NEAR(n[j], ev[j], 0.05 * ev[j]) << j;  // 2^13 pilot states per pixel: ~1-2 % noise
+  }
+  EXPECT_NEAR(sum, double(N), 1e-9 * double(N));
+}
+
+// A capped target (pi = min{Y, 1}, as the stratified target caps at r~ = 1) on one pixel whose
+// value is 100 with probability q = 0.01 and 1 otherwise: b = 1, E[Y] = 1.99, E[Y^2 / pi] = 100.99,
+// so n = N 1.99^2 / 100.99 = 0.0392 N, against N for the plain target. With two levels (the same
+// function on each), N_l = N / 2 (level_shares of equal b_l), and the variances of the levels add:
+// n = N (2 * 1.99)^2 / (2 * 100.99 * 2) = 0.0392 N as well.
+TEST(PssEffectiveVisits, CappedTargetCountsTheRareBrightStates) {
+  for (int levels : {1, 2}) {
+    SampleFunction f;
+    f.levels = levels;
+    f.sample = [](int, StreamUniforms& u, std::vector<Splat>* out) {
+      u.use_stream(kCameraStream);
+      const double a = u.next(), b = u.next();
+      out->push_back({Vec2{a, b}, Rgb(u.next() < 0.01 ? 100.0 : 1.0)});
+    };
+    const TargetFunction capped = [](const std::vector<Splat>& sp) { return std::min(1.0, target_value(sp)); };
+    const int64_t N = 10000;
+    const double plain = effective_visits(f, {}, 1, 1, N, 1 << 16, 5)[0];
+    const double n = effective_visits(f, capped, 1, 1, N, 1 << 16, 5)[0];
+    // One level: exactly N. Two: N when the shares are b_l / b; level_shares mixes in 1 / L, which
+    // moves n only to second order in the pilots' difference of b_l.
+    EXPECT_NEAR(plain, double(N), (levels == 1 ? 1e-9 : 1e-3) * double(N)) << levels;
+    const double expect = double(N) * 1.99 * 1.99 / 100.99;
+    EXPECT_NEAR(n, expect, 0.1 * expect) << levels;  // 655 bright pilot states per level: ~4 %
+    EXPECT_LT(n, 0.05 * double(N)) << levels;
+  }
+}
+
 // The path tracer split into paths (pt_paths_sample_function) sums to its single radiance splat
 // on the same state, every ratio is >= 1, direct illumination (and the emitter seen directly)
 // has ratio 1, and paths with a diffuse bounce before their last vertex have ratio > 1.

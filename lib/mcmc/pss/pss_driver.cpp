@@ -239,6 +239,89 @@ void mutate(Chain& c, SplatBuffer& buffer) {
 
 }  // namespace
 
+std::vector<double> effective_visits(const SampleFunction& f, const TargetFunction& target, int width, int height,
+                                     int64_t mutations, int64_t n, uint64_t seed, bool resample_levels) {
+  constexpr uint64_t kKey = hash_string("pss.effective_visits");
+  constexpr size_t kChunks = 64;  // fixed chunks: sums independent of the thread count
+  const int levels = std::max(1, f.levels);
+  const size_t P = static_cast<size_t>(width) * static_cast<size_t>(height);
+  n = std::max<int64_t>(1, n);
+  // Per chunk and level: sum of pi, and per pixel the sums of Y_j and Y_j^2 / pi.
+  struct Sums {
+    std::vector<double> pi, y, y2;
+  };
+  std::vector<Sums> sums(kChunks);
+  parallel_for(kChunks, [&](size_t chunk) {
+    Sums& s = sums[chunk];
+    s.pi.assign(static_cast<size_t>(levels), 0.0);
+    s.y.assign(static_cast<size_t>(levels) * P, 0.0);
+    s.y2.assign(static_cast<size_t>(levels) * P, 0.0);
+    std::vector<Splat> sp;
+    std::vector<std::pair<size_t, Rgb>> in_pixel;
+    const int64_t lo = n * static_cast<int64_t>(chunk) / int64_t(kChunks), hi = n * static_cast<int64_t>(chunk + 1) / int64_t(kChunks);
+    for (int l = 0; l < levels; ++l)
+      for (int64_t i = lo; i < hi; ++i) {
+        PssState st(Rng::for_sample(seed, kKey, static_cast<uint64_t>(l * n + i)), 0.01);
+        sp.clear();
+        st.restart();
+        f.sample(l, st, &sp);
+        const double pi = target ? target(sp) : target_value(sp);
+        if (!std::isfinite(pi) || !(pi > 0.0)) continue;
+        s.pi[static_cast<size_t>(l)] += pi;
+        in_pixel.clear();
+        for (const Splat& c : sp) {
+          const int x = static_cast<int>(std::floor(c.raster.x)), y = static_cast<int>(std::floor(c.raster.y));
+          if (x < 0 || y < 0 || x >= width || y >= height) continue;
+          const size_t j = static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x);
+          auto it = std::find_if(in_pixel.begin(), in_pixel.end(), [j](const auto& e) { return e.first == j; });
+          if (it == in_pixel.end()) in_pixel.push_back({j, c.value});
+          else it->second += c.value;
+        }
+        for (const auto& [j, v] : in_pixel) {
+          const double yj = std::max(0.0, luminance(v));
+          s.y[static_cast<size_t>(l) * P + j] += yj;
+          s.y2[static_cast<size_t>(l) * P + j] += yj * yj / pi;
+        }
+      }
+  });
+  std::vector<double> b(static_cast<size_t>(levels), 0.0), I(P, 0.0), var(P, 0.0);
+  for (const Sums& s : sums)
+    for (int l = 0; l < levels; ++l) b[static_cast<size_t>(l)] += s.pi[static_cast<size_t>(l)] / double(n);
+  // One group over all levels (resample_levels): x ~ pi / sum_l b_l over (level, u), N mutations.
+  double b_all = 0.0;
+  for (double v : b) b_all += v;
+  const std::vector<double> shares = resample_levels ? std::vector<double>(static_cast<size_t>(levels), 1.0) : level_shares(b);
+  for (int l = 0; l < levels; ++l) {
+    const double Nl = std::max(1.0, std::round(double(mutations) * shares[static_cast<size_t>(l)]));
+    const double bl = resample_levels ? b_all : b[static_cast<size_t>(l)];
+    for (size_t j = 0; j < P; ++j) {
+      double y = 0.0, y2 = 0.0;
+      for (const Sums& s : sums) {
+        y += s.y[static_cast<size_t>(l) * P + j];
+        y2 += s.y2[static_cast<size_t>(l) * P + j];
+      }
+      I[j] += y / double(n);
+      var[j] += bl * (y2 / double(n)) / Nl;
+    }
+  }
+  std::vector<double> out(P, 0.0);
+  for (size_t j = 0; j < P; ++j) out[j] = var[j] > 0.0 ? I[j] * I[j] / var[j] : 0.0;
+  return out;
+}
+
+std::vector<double> level_shares(const std::vector<double>& pilot_b) {
+  const size_t L = pilot_b.size();
+  double sum = 0.0;
+  for (double v : pilot_b) sum += v;
+  std::vector<double> shares(L, 1.0);
+  if (L == 1) return shares;
+  // Defensive mixture: every level keeps a tenth of its uniform share, so a level the pilot
+  // missed is still sampled (its estimate stays unbiased, only noisier).
+  for (size_t l = 0; l < L; ++l)
+    shares[l] = (sum > 0.0 ? 0.9 * pilot_b[l] / sum : 0.0) + (sum > 0.0 ? 0.1 : 1.0) / double(L);
+  return shares;
+}
+
 namespace {
 
 // Mutations and chains of each level in a pass (see PssSettings::resample_levels).
@@ -249,14 +332,11 @@ struct LevelPlan {
 
 std::vector<LevelPlan> plan_levels(const std::vector<double>& pilot_b, int64_t N, int64_t C) {
   const size_t L = pilot_b.size();
-  double sum = 0.0;
-  for (double v : pilot_b) sum += v;
+  const std::vector<double> shares = level_shares(pilot_b);
   std::vector<LevelPlan> plan(L);
   int64_t first = 0;
   for (size_t l = 0; l < L; ++l) {
-    // Defensive mixture: every level keeps a tenth of its uniform share, so a level the pilot
-    // missed is still sampled (its estimate stays unbiased, only noisier).
-    const double frac = L == 1 ? 1.0 : (sum > 0.0 ? 0.9 * pilot_b[l] / sum : 0.0) + (sum > 0.0 ? 0.1 : 1.0) / double(L);
+    const double frac = shares[l];
     LevelPlan& p = plan[l];
     p.chains = std::max<int64_t>(1, std::llround(double(C) * frac));
     p.mutations = std::max<int64_t>(p.chains, std::llround(double(N) * frac));

@@ -143,6 +143,24 @@ struct PssStats {
 // pass has far-from-normal Welch samples, which the image checks exclude (docs/mlt-pss.md).
 std::vector<double> expected_visits(const std::vector<Rgb>& image, int64_t mutations);
 
+// Effective number of independent visits per pass of each pixel (y * width + x) by a chain
+// targeting pi, from n fresh states per level (seed and key of their own; deterministic for any
+// thread count). A pass estimates pixel j as P b_l / N_l sum_i Y_j(x_i) / pi(x_i) over each level's
+// N_l mutations, x_i ~ pi / b_l; with independent x_i its relative variance is 1 / n_j,
+//   n_j = I_j^2 / sum_l (b_l E_u[Y_j^2 / pi] / N_l),   I_j = sum_l E_u[Y_j],   b_l = E_u[pi],
+// Y_j(u) the luminance of the state's splats in pixel j, E_u over uniform states of level l. For
+// the plain target (pi = Y of the one pixel a state splats to) n_j = N Y_j / b, expected_visits.
+// A target that caps bright states (stratified_pss.h) makes n_j small where a pixel's value comes
+// from states the chain rarely visits; such a pixel's Welch samples are heavy-tailed
+// (docs/zirr2020.md). N_l from level_shares (one level, or resample_levels: N).
+std::vector<double> effective_visits(const SampleFunction& f, const TargetFunction& target, int width, int height,
+                                     int64_t mutations, int64_t n, uint64_t seed, bool resample_levels = false);
+
+// The share of a pass's mutations each level's chain set gets when the levels are not resampled:
+// 0.9 b_l / b + 0.1 / L from the pilot's b_l (1 for a single level; 1 / L when the pilot found
+// nothing). The chains of a level are its share of PssSettings::chains, at least one.
+std::vector<double> level_shares(const std::vector<double>& pilot_b);
+
 // Renders settings.passes passes of settings.spp / settings.passes mutations per pixel each.
 // Returns the number of passes done.
 // Applies RenderSettings::params (bootstrap, chains, large_step, sigma) to PssSettings; throws
