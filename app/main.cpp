@@ -38,6 +38,25 @@ struct CheckArgs {
   std::string out = "reports/out/latest";
 };
 
+// One line per effect kind: how many checks detect the target effect at 90% power, and the
+// three weakest.
+void print_power(const nlohmann::json& p) {
+  const double target = p.value("target", 0.02);
+  fmt::print("Power (90%, first attempts, controls left out): {} checks state their minimum detectable effect, {} do not\n",
+             p.value("stated", 0), p.value("not_stated", 0));
+  for (const auto& [kind, k] : p["kinds"].items()) {
+    std::string weakest;
+    int shown = 0;
+    for (const auto& e : k["above_target"]) {
+      if (shown++ == 3) break;
+      weakest += fmt::format("{}{} {:.3g}%", shown > 1 ? ", " : "", e.value("name", ""), 100.0 * e.value("mde", 0.0));
+    }
+    fmt::print("  {}: {} of {} detect {:.3g}% (median {:.3g}%){}{}\n", kind.empty() ? "(unnamed)" : kind,
+               k.value("meet_target", 0), k.value("checks", 0), 100.0 * target, 100.0 * k.value("median", 0.0),
+               weakest.empty() ? "" : "; weakest: ", weakest);
+  }
+}
+
 int cmd_check(const CheckArgs& a) {
   const auto selected = tb::Registry::global().select(a.names);
   const bool quiet_rank = tb::mpi::world().rank != 0;  // under mpirun only rank 0 prints
@@ -125,6 +144,7 @@ int cmd_check(const CheckArgs& a) {
     s = std::move(merged);
   }
 
+  s.results["power"] = tb::power_summary(s.results["checks"]);
   const std::string results_path = (std::filesystem::path(a.out) / "results.json").string();
   tb::write_file_atomic(results_path, s.results.dump(1));
   tb::write_check_report(s.results, a.out);
@@ -132,6 +152,7 @@ int cmd_check(const CheckArgs& a) {
              s.resumed ? fmt::format(" ({} resumed)", s.resumed) : "",
              s.interrupted ? " (interrupted: rerun with --resume to continue)" : "",
              (std::filesystem::path(a.out) / "index.html").string());
+  print_power(s.results["power"]);
   if (s.failed > 0) {
     fmt::print("Failures, with the command that reproduces each:\n");
     for (const auto& rec : s.results["checks"]) {

@@ -1,8 +1,12 @@
 #include "validate/runner.h"
 
+#include <algorithm>
 #include <chrono>
 #include <exception>
 #include <filesystem>
+#include <map>
+#include <utility>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -115,6 +119,45 @@ RunSummary run_checks(const std::vector<const Check*>& checks, const RunOptions&
   s.results["failed"] = s.failed;
   s.results["interrupted"] = s.interrupted;
   return s;
+}
+
+nlohmann::json power_summary(const nlohmann::json& check_records, double target) {
+  struct Kind {
+    std::vector<std::pair<double, std::string>> mde;
+  };
+  std::map<std::string, Kind> kinds;
+  int64_t stated = 0, not_stated = 0;
+  for (const auto& rec : check_records) {
+    const std::string name = rec.value("name", "");
+    if (name.find("negative_control") != std::string::npos || !rec.contains("first")) continue;
+    const auto& r = rec["first"];
+    const auto v = r.value("min_detectable_effect", nlohmann::json());
+    if (!v.is_number()) {
+      ++not_stated;
+      continue;
+    }
+    ++stated;
+    kinds[r.value("effect_kind", "")].mde.emplace_back(v.get<double>(), name);
+  }
+  nlohmann::json out = {{"stated", stated}, {"not_stated", not_stated}, {"target", target}};
+  nlohmann::json jk = nlohmann::json::object();
+  for (auto& [kind, k] : kinds) {
+    std::sort(k.mde.begin(), k.mde.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    nlohmann::json above = nlohmann::json::array();
+    int64_t meet = 0;
+    for (const auto& [m, n] : k.mde) {
+      if (m <= target)
+        ++meet;
+      else
+        above.push_back({{"name", n}, {"mde", m}});
+    }
+    jk[kind] = {{"checks", k.mde.size()},
+                {"meet_target", meet},
+                {"median", k.mde[k.mde.size() / 2].first},
+                {"above_target", above}};
+  }
+  out["kinds"] = jk;
+  return out;
 }
 
 }  // namespace tb
