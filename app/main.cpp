@@ -49,7 +49,8 @@ void print_power(const nlohmann::json& p) {
     int shown = 0;
     for (const auto& e : k["above_target"]) {
       if (shown++ == 3) break;
-      weakest += fmt::format("{}{} {:.3g}%", shown > 1 ? ", " : "", e.value("name", ""), 100.0 * e.value("mde", 0.0));
+      weakest += fmt::format("{}{} {:.3g}% (needs {:.3g}x the samples)", shown > 1 ? ", " : "", e.value("name", ""),
+                             100.0 * e.value("mde", 0.0), e.value("samples_scale_for_target", 0.0));
     }
     fmt::print("  {}: {} of {} detect {:.3g}% (median {:.3g}%){}{}\n", kind.empty() ? "(unnamed)" : kind,
                k.value("meet_target", 0), k.value("checks", 0), 100.0 * target, 100.0 * k.value("median", 0.0),

@@ -149,7 +149,8 @@ nlohmann::json power_summary(const nlohmann::json& check_records, double target)
       if (m <= target)
         ++meet;
       else
-        above.push_back({{"name", n}, {"mde", m}});
+        // A standard error falls as 1/sqrt(samples): (m / target)^2 the samples would reach the target.
+        above.push_back({{"name", n}, {"mde", m}, {"samples_scale_for_target", (m / target) * (m / target)}});
     }
     jk[kind] = {{"checks", k.mde.size()},
                 {"meet_target", meet},

@@ -53,7 +53,8 @@ RunSummary run_checks(const std::vector<const Check*>& checks, const RunOptions&
 // state their minimum detectable effect (CheckResult::min_detectable_effect, of the first
 // attempt), and, per effect kind, how many detect `target` (default 2%) at 90% power and which
 // do not, largest first: {"stated": n, "not_stated": n, "target": t, "kinds": {kind: {"checks": n,
-// "meet_target": n, "median": m, "above_target": [{"name", "mde"}...]}}}. Negative controls are
+// "meet_target": n, "median": m, "above_target": [{"name", "mde", "samples_scale_for_target"}...]}}}
+// (the factor on the samples that would reach the target, (mde / target)^2). Negative controls are
 // left out (their job is to be rejected, not to bound a bias).
 nlohmann::json power_summary(const nlohmann::json& check_records, double target = 0.02);
 

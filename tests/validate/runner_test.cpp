@@ -1,6 +1,8 @@
 #include "validate/runner.h"
 
+#include <cmath>
 #include <filesystem>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -122,6 +124,43 @@ TEST(AtomicFile, WritesAndReadsBack) {
   write_file_atomic(p, "again");
   EXPECT_EQ(read_file(p), "again");
   EXPECT_THROW(read_file(p + ".missing"), std::runtime_error);
+}
+
+// The power census: records from run_one with and without a stated effect, a negative control
+// (left out), and the ordering and sample factors of the checks above the 2% target.
+TEST(Runner, PowerSummaryCountsStatedEffectsAndNamesTheWeakest) {
+  const auto check_with = [](std::string name, double mde) {
+    return make_check(std::move(name), CheckKind::kStatistical, [mde](const CheckContext&) {
+      CheckResult r;
+      r.passed = true;
+      r.p_value = 0.5;
+      r.alpha = 0.01;
+      r.min_detectable_effect = mde;
+      if (std::isfinite(mde)) r.effect_kind = "uniform relative bias of the image";
+      return r;
+    });
+  };
+  RunOptions opt;
+  nlohmann::json records = nlohmann::json::array();
+  records.push_back(run_one(check_with("a.ok", 0.01), opt));
+  records.push_back(run_one(check_with("a.weak", 0.04), opt));
+  records.push_back(run_one(check_with("a.weaker", 0.06), opt));
+  records.push_back(run_one(check_with("a.unstated", std::numeric_limits<double>::infinity()), opt));
+  records.push_back(run_one(check_with("a.negative_control.x", 0.5), opt));
+  const nlohmann::json p = power_summary(records, 0.02);
+  EXPECT_EQ(p["stated"], 3);
+  EXPECT_EQ(p["not_stated"], 1);
+  const auto& k = p["kinds"]["uniform relative bias of the image"];
+  EXPECT_EQ(k["checks"], 3);
+  EXPECT_EQ(k["meet_target"], 1);
+  EXPECT_DOUBLE_EQ(k["median"].get<double>(), 0.04);
+  ASSERT_EQ(k["above_target"].size(), 2u);
+  EXPECT_EQ(k["above_target"][0]["name"], "a.weaker");
+  EXPECT_NEAR(k["above_target"][0]["samples_scale_for_target"].get<double>(), 9.0, 1e-12);
+  EXPECT_NEAR(k["above_target"][1]["samples_scale_for_target"].get<double>(), 4.0, 1e-12);
+  // The record itself carries the statement (null when not stated).
+  EXPECT_DOUBLE_EQ(records[0]["first"]["min_detectable_effect"].get<double>(), 0.01);
+  EXPECT_TRUE(records[3]["first"]["min_detectable_effect"].is_null());
 }
 
 }  // namespace
