@@ -40,7 +40,11 @@ double unit_gain(double dof) {
 }
 }  // namespace
 
-double uniform_bias_mde(const std::vector<std::pair<double, double>>& gain_alpha, double power) {
+double uniform_bias_mde(const std::vector<std::pair<double, double>>& all, double power) {
+  // Tests without signal or without a level (a channel with no tested unit) add no power.
+  std::vector<std::pair<double, double>> gain_alpha;
+  for (const auto& [g, a] : all)
+    if (g > 0.0 && std::isfinite(g) && a > 0.0 && a < 1.0) gain_alpha.emplace_back(g, a);
   double best = 0.0;
   for (const auto& [g, a] : gain_alpha) best = std::max(best, g);
   if (!(best > 0.0)) return kMdeNone;

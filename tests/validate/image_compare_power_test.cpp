@@ -73,6 +73,16 @@ TEST(ImageComparePower, TToZSlopeMatchesMonteCarlo) {
   }
 }
 
+TEST(ImageComparePower, UniformBiasMdeIgnoresTestsWithoutSignalOrLevel) {
+  const double one = uniform_bias_mde({{2.0, 1e-3}});
+  EXPECT_NEAR(one * 2.0, stats::minimal_detectable_shift(1e-3, 0.9), 1e-9);
+  // A channel with no tested unit has gain 0 and level 0: no power, no error.
+  EXPECT_DOUBLE_EQ(uniform_bias_mde({{2.0, 1e-3}, {0.0, 0.0}, {0.0, 1e-3}}), one);
+  EXPECT_FALSE(std::isfinite(uniform_bias_mde({{0.0, 0.0}})));
+  // Two equal independent tests need a smaller bias than one.
+  EXPECT_LT(uniform_bias_mde({{2.0, 1e-3}, {2.0, 1e-3}}), one);
+}
+
 struct PowerRun {
   double mde = 0;
   int rejects_at_mde = 0, rejects_at_half = 0, replicates = 0;
