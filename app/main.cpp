@@ -3,6 +3,7 @@
 // OpenEXR), compare (statistical comparison of renders; equal-time comparison of integrators).
 #include <atomic>
 #include <csignal>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -35,8 +36,77 @@ struct CheckArgs {
   bool quick = false, full = false, list = false, resume = false, no_progress = false;
   uint64_t seed = 1;
   int attempt = 0;
+  int calibrate = 0;
   std::string out = "reports/out/latest";
 };
+
+// `tb check --calibrate K`: the selection under K seeds, then the measured false-alarm rates.
+int cmd_calibrate(const CheckArgs& a, const std::vector<const tb::Check*>& selected) {
+  if (tb::mpi::world().size > 1) {
+    fmt::print(stderr, "tb check --calibrate: run it without mpirun (one process)\n");
+    return 2;
+  }
+  if (a.attempt != 0) {
+    fmt::print(stderr, "tb check --calibrate: --attempt does not apply (every seed runs the normal policy)\n");
+    return 2;
+  }
+  tb::RunOptions opt;
+  opt.seed = a.seed;
+  opt.full = a.full;
+  opt.out_dir = a.out;
+  opt.resume = a.resume;
+  opt.interrupted = &g_interrupted;
+  fmt::print("tb check --calibrate {}: {} checks, {} size, seeds {}..{}, results in {}\n", a.calibrate, selected.size(),
+             a.full ? "full" : "quick", a.seed, a.seed + uint64_t(a.calibrate) - 1, a.out);
+  const auto t0 = std::chrono::steady_clock::now();
+  const nlohmann::json j = tb::calibrate_checks(selected, opt, a.calibrate, [&](int k, const tb::RunSummary& s) {
+    const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    fmt::print("seed {} ({}/{}): {} passed, {} failed{}; {:.0f} s so far\n", a.seed + uint64_t(k), k + 1, a.calibrate,
+               s.passed, s.failed, s.resumed ? fmt::format(" ({} resumed)", s.resumed) : "", el);
+    std::fflush(stdout);
+  });
+  const auto show = [](const nlohmann::json& r) {
+    return fmt::format("{} of {} = {:.3g} [95% CI {:.3g}, {:.3g}]", r.value("count", 0), r.value("runs", 0),
+                       r.value("rate", 0.0), r["ci95"][0].get<double>(), r["ci95"][1].get<double>());
+  };
+  fmt::print("\nSuite (negative controls aside): a check failed on {} seeds; a first attempt rejected on {}\n",
+             show(j["suite_failed"]), show(j["suite_first_attempt_rejected"]));
+  fmt::print("By construction: expected first-attempt rejections per run {:.3g} (sum of alpha); "
+             "suite failure <= {:.3g} (sum of alpha^2: both attempts must reject)\n",
+             j.value("expected_first_attempt_rejections_per_run", 0.0), j.value("bound_suite_failure", 0.0));
+  int shown = 0;
+  for (const auto& c : j["checks"]) {
+    const bool control = c.value("negative_control", false);
+    const auto& r = control ? c["missed"] : c["first_attempt_rejected"];
+    if (r.value("count", 0) == 0) continue;
+    if (shown++ == 0) fmt::print("Checks that rejected (first attempts; controls: missed):\n");
+    fmt::print("  {:<56} alpha {:.3g}: {}{}\n", c.value("name", ""), c.value("alpha", 0.0), show(r),
+               control ? " MISSED" : fmt::format(", failed {}", c["failed"].value("count", 0)));
+  }
+  if (shown == 0) fmt::print("No check rejected on any seed.\n");
+  fmt::print("Results: {}\n", (std::filesystem::path(a.out) / "calibrate.json").string());
+  return j.value("interrupted", false) ? 130 : 0;
+}
+
+// One line per effect kind: how many checks detect the target effect at 90% power, and the
+// three weakest.
+void print_power(const nlohmann::json& p) {
+  const double target = p.value("target", 0.02);
+  fmt::print("Power (90%, first attempts, controls left out): {} checks state their minimum detectable effect, {} do not\n",
+             p.value("stated", 0), p.value("not_stated", 0));
+  for (const auto& [kind, k] : p["kinds"].items()) {
+    std::string weakest;
+    int shown = 0;
+    for (const auto& e : k["above_target"]) {
+      if (shown++ == 3) break;
+      weakest += fmt::format("{}{} {:.3g}% (needs {:.3g}x the samples)", shown > 1 ? ", " : "", e.value("name", ""),
+                             100.0 * e.value("mde", 0.0), e.value("samples_scale_for_target", 0.0));
+    }
+    fmt::print("  {}: {} of {} detect {:.3g}% (median {:.3g}%){}{}\n", kind.empty() ? "(unnamed)" : kind,
+               k.value("meet_target", 0), k.value("checks", 0), 100.0 * target, 100.0 * k.value("median", 0.0),
+               weakest.empty() ? "" : "; weakest: ", weakest);
+  }
+}
 
 int cmd_check(const CheckArgs& a) {
   const auto selected = tb::Registry::global().select(a.names);
@@ -55,6 +125,7 @@ int cmd_check(const CheckArgs& a) {
     fmt::print(stderr, " (see tb check --list)\n");
     return 2;
   }
+  if (a.calibrate > 0) return cmd_calibrate(a, selected);
   // Under mpirun: rank r runs the checks whose index is r mod n; rank 0 alone prints, writes the
   // records, the results and the report (docs/checks-and-reports.md, "Under mpirun").
   const tb::mpi::World& world = tb::mpi::world();
@@ -125,6 +196,7 @@ int cmd_check(const CheckArgs& a) {
     s = std::move(merged);
   }
 
+  s.results["power"] = tb::power_summary(s.results["checks"]);
   const std::string results_path = (std::filesystem::path(a.out) / "results.json").string();
   tb::write_file_atomic(results_path, s.results.dump(1));
   tb::write_check_report(s.results, a.out);
@@ -132,6 +204,7 @@ int cmd_check(const CheckArgs& a) {
              s.resumed ? fmt::format(" ({} resumed)", s.resumed) : "",
              s.interrupted ? " (interrupted: rerun with --resume to continue)" : "",
              (std::filesystem::path(a.out) / "index.html").string());
+  print_power(s.results["power"]);
   if (s.failed > 0) {
     fmt::print("Failures, with the command that reproduces each:\n");
     for (const auto& rec : s.results["checks"]) {
@@ -218,6 +291,10 @@ int main(int argc, char** argv) {
   check->add_option("--out", ca.out, "Output folder for results.json, records/ and index.html")->capture_default_str();
   check->add_option("--attempt", ca.attempt, "Run the k-th rerun directly (fresh seed, 4x samples); for reproducers")
       ->check(CLI::Range(0, 1));
+  check->add_option("--calibrate", ca.calibrate,
+                    "Run the selection under K seeds (--seed, --seed + 1, ...) and report each check's and the suite's "
+                    "measured false-alarm rate with 95% intervals (OUT/calibrate.json; resumable with --resume)")
+      ->check(CLI::PositiveNumber);
   check->add_flag("--list", ca.list, "List the checks (matching NAMES) and exit");
   check->add_flag("--resume", ca.resume, "Reuse finished checks of an interrupted run with the same seed and size");
   check->add_flag("--no-progress", ca.no_progress, "No progress line on stderr");

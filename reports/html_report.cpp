@@ -70,6 +70,12 @@ std::string plots_html(const nlohmann::json& plots, const std::string& out_dir, 
   return html;
 }
 
+// The smallest effect a check detects with 90% power, as a percentage; "—" when not stated.
+std::string mde_cell(const nlohmann::json& v) {
+  if (!v.is_number()) return "&mdash;";
+  return fmt::format("{:.3g}%", 100.0 * v.get<double>());
+}
+
 std::string result_row(const nlohmann::json& r, const char* which) {
   return fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.2f}</td><td>{}</td><td><code>{}</code></td></tr>\n",
                      which, html_escape(r.value("statistic_name", "")), fmt_num(r.value("statistic", nlohmann::json())),
@@ -93,18 +99,20 @@ void write_check_report(const nlohmann::json& results, const std::string& out_di
                    cfg.value("attempt", 0) > 0 ? fmt::format(" &middot; attempt {}", cfg.value("attempt", 0)) : "");
   h << "<p>Statistical checks that reject are rerun once with a fresh seed and 4&times; the samples; they fail only "
        "if the rerun rejects too (both results are shown). &alpha; is the level after the check's own multiple-comparison "
-       "correction.</p>\n";
+       "correction. MDE is the smallest effect the check rejects with 90% power at that &alpha; and its sample "
+       "size (hover for which effect; &mdash;: not stated).</p>\n";
   h << "<table><tr><th>check</th><th>verdict</th><th>statistic</th><th>value</th><th>p</th><th>&alpha;</th>"
-       "<th>n</th><th>time [s]</th><th>message</th></tr>\n";
+       "<th>n</th><th>MDE</th><th>time [s]</th><th>message</th></tr>\n";
   for (const auto& rec : results["checks"]) {
     const std::string verdict = rec.value("verdict", "fail");
     const char* cls = verdict == "pass" ? "pass" : verdict == "fail" ? "fail" : "rerun";
     const auto& r = rec["first"];
-    h << fmt::format("<tr><td><a href=\"#{}\">{}</a></td><td class=\"{}\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.2f}</td><td>{}</td></tr>\n",
+    h << fmt::format("<tr><td><a href=\"#{}\">{}</a></td><td class=\"{}\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td title=\"{}\">{}</td><td>{:.2f}</td><td>{}</td></tr>\n",
                      slug(rec.value("name", "")), html_escape(rec.value("name", "")), cls, verdict,
                      html_escape(r.value("statistic_name", "")), fmt_num(r.value("statistic", nlohmann::json())),
                      fmt_num(r.value("p_value", nlohmann::json())), fmt_num(r.value("alpha", nlohmann::json())),
-                     fmt_num(r.value("samples", nlohmann::json())), r.value("seconds", 0.0),
+                     fmt_num(r.value("samples", nlohmann::json())), html_escape(r.value("effect_kind", "")),
+                     mde_cell(r.value("min_detectable_effect", nlohmann::json())), r.value("seconds", 0.0),
                      html_escape(r.value("message", "")));
   }
   h << "</table>\n<h2>Details</h2>\n";

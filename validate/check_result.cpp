@@ -43,6 +43,8 @@ void to_json(nlohmann::json& j, const CheckResult& r) {
        {"alpha", number(r.alpha)},
        {"samples", r.samples},
        {"message", r.message},
+       {"min_detectable_effect", std::isfinite(r.min_detectable_effect) ? number(r.min_detectable_effect) : nlohmann::json(nullptr)},
+       {"effect_kind", r.effect_kind},
        {"seed", r.seed},
        {"seconds", r.seconds},
        {"reproducer", r.reproducer},

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,12 @@ struct CheckResult {
   double alpha = 0.0;           // significance level after multiple-comparison correction
   int64_t samples = 0;          // total samples (or configurations) the check used
   std::string message;          // one line a user reads first: what was found
+  // Power: the smallest effect the check rejects with 90% power at its alpha and sample size
+  // (docs/statistics.md, "What a passing check rules out"), relative (0.02 = 2%); infinite when
+  // the check has not stated it, or has no power. effect_kind says which effect ("uniform relative
+  // bias of the image", "relative bias of the estimate", ...).
+  double min_detectable_effect = std::numeric_limits<double>::infinity();
+  std::string effect_kind;
   nlohmann::json details = nlohmann::json::object();  // everything else (per-case p-values, ...)
   std::vector<PlotSpec> plots;
 

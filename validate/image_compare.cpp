@@ -30,6 +30,47 @@ double z_from_two_sided_p(double p, double t) {
 
 }  // namespace
 
+namespace {
+// The shift of one unit's z per unit of m / se_hat (image_compare.h): kappa(dof) times
+// sigma / se_hat's correction 1 / E[sigma / s] (1 / se_hat overestimates 1 / sigma); 0 (no
+// stated power from this unit) where dof <= 1.
+double unit_gain(double dof) {
+  const double b = stats::inverse_sd_bias(dof);
+  return std::isfinite(b) ? stats::t_to_z_slope(dof) / b : 0.0;
+}
+}  // namespace
+
+double uniform_bias_mde(const std::vector<std::pair<double, double>>& all, double power) {
+  // Tests without signal or without a level (a channel with no tested unit) add no power.
+  std::vector<std::pair<double, double>> gain_alpha;
+  for (const auto& [g, a] : all)
+    if (g > 0.0 && std::isfinite(g) && a > 0.0 && a < 1.0) gain_alpha.emplace_back(g, a);
+  double best = 0.0;
+  for (const auto& [g, a] : gain_alpha) best = std::max(best, g);
+  if (!(best > 0.0)) return kMdeNone;
+  const auto miss = [&](double d) {  // probability that no test rejects
+    double m = 1.0;
+    for (const auto& [g, a] : gain_alpha) m *= 1.0 - stats::z_test_power(d * g, a);
+    return m;
+  };
+  // Bracket: the best single test alone reaches the power at its own minimal detectable shift.
+  double lo = 0.0, hi = 0.0;
+  for (const auto& [g, a] : gain_alpha)
+    if (g == best) hi = stats::minimal_detectable_shift(a, power) / g;
+  for (int it = 0; it < 100 && hi - lo > 1e-12 * hi; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (1.0 - miss(mid) >= power ? hi : lo) = mid;
+  }
+  return hi;
+}
+
+std::string mde_phrase(double mde) {
+  if (!std::isfinite(mde)) return "no uniform bias detectable (no signal)";
+  return fmt::format("detects a uniform bias of {:.3g}% at 90% power", 100.0 * mde);
+}
+
+nlohmann::json mde_json(double mde) { return std::isfinite(mde) ? nlohmann::json(mde) : nlohmann::json(nullptr); }
+
 double ImageCompareResult::p_value() const {
   const double p_min = zero_variance_mismatch > 0 ? 0.0 : std::min({p_pixel_family, stouffer.p_value, sum_z2.p_value});
   return stats::sidak_adjust(p_min, 3);
@@ -38,12 +79,12 @@ double ImageCompareResult::p_value() const {
 std::string ImageCompareResult::message() const {
   return fmt::format(
       "{}: {}P={} {}-channels, mean rel. diff {:+.3g}; Stouffer Z={:.3g} (ch {}, p={:.3g}), sum z^2={:.4g} (ch {}, p={:.3g}), "
-      "worst {} ({}, {}) ch {} t={:.3g} p={:.3g} (family p={:.3g}){}; alpha={} ({} per test)",
+      "worst {} ({}, {}) ch {} t={:.3g} p={:.3g} (family p={:.3g}){}; alpha={} ({} per test); {}",
       rejects() ? "different" : "consistent", tiled ? fmt::format("{}x{} tiles, ", tile, tile) : "", tested,
       tiled ? "tile" : "pixel", mean_relative_difference, stouffer.statistic, stouffer_channel,
       stouffer.p_value, sum_z2.statistic, sum_z2_channel, sum_z2.p_value, tiled ? "tile at" : "pixel", worst.x, worst.y, worst.channel, worst.t, worst.p, p_pixel_family,
       zero_variance_mismatch > 0 ? fmt::format(", {} zero-variance mismatches", zero_variance_mismatch) : "", alpha,
-      alpha_each);
+      alpha_each, mde_phrase(min_detectable_relative_bias));
 }
 
 nlohmann::json ImageCompareResult::details() const {
@@ -76,6 +117,10 @@ nlohmann::json ImageCompareResult::details() const {
           {"predicted_skew_shift_pixel", predicted_shift_pixel},
           {"max_skew_shift", max_skew_shift},
           {"skew_condition_met", skew_condition_met()},
+          {"min_detectable_relative_bias", mde_json(min_detectable_relative_bias)},
+          {"min_detectable_relative_bias_channel",
+           {mde_json(min_detectable_bias_channel[0]), mde_json(min_detectable_bias_channel[1]),
+            mde_json(min_detectable_bias_channel[2])}},
           {"rejects", rejects()}};
 }
 
@@ -138,7 +183,7 @@ namespace {
 
 // The three global tests over the tested units (pixel-channels or tile-channels), per channel.
 void finish_global_tests(ImageCompareResult& r, const std::vector<double> (&zc)[3], double min_p, double sum_diff,
-                         double sum_b) {
+                         double sum_b, const double (&signal)[3]) {
   r.tested = static_cast<int64_t>(zc[0].size() + zc[1].size() + zc[2].size());
   r.mean_relative_difference = sum_b != 0.0 ? sum_diff / sum_b : 0.0;
   if (r.tested > 0) {
@@ -163,6 +208,16 @@ void finish_global_tests(ImageCompareResult& r, const std::vector<double> (&zc)[
     }
     r.stouffer.p_value = stats::sidak_adjust(r.stouffer.p_value, 3);
     r.sum_z2.p_value = stats::sidak_adjust(r.sum_z2.p_value, 3);
+    // Power of the Stouffer tests against a uniform relative bias (image_compare.h).
+    r.alpha_stouffer = stats::sidak_alpha(r.alpha_each, 3);
+    std::vector<std::pair<double, double>> gains;
+    for (int c = 0; c < 3; ++c) {
+      if (zc[c].empty() || !std::isfinite(signal[c])) continue;
+      r.stouffer_gain[c] = std::abs(signal[c]) / std::sqrt(double(zc[c].size()));
+      r.min_detectable_bias_channel[c] = uniform_bias_mde({{r.stouffer_gain[c], r.alpha_stouffer}});
+      gains.emplace_back(r.stouffer_gain[c], r.alpha_stouffer);
+    }
+    r.min_detectable_relative_bias = uniform_bias_mde(gains);
   }
 }
 
@@ -256,6 +311,7 @@ ImageCompareResult compare_tiled(const WelchImage& a, const WelchImage& b, doubl
   r.predicted_shift_pixel = tile_skew_shift(a, b, 1);
   const std::vector<TileSums> tiles = tile_sums(a, b, r.tile);
   std::vector<double> zc[3];
+  double signal[3] = {0.0, 0.0, 0.0};
   double min_p = 2.0, sum_diff = 0.0, sum_b = 0.0;
   for (const TileSums& s : tiles)
     for (int c = 0; c < 3; ++c) {
@@ -288,6 +344,7 @@ ImageCompareResult compare_tiled(const WelchImage& a, const WelchImage& b, doubl
       pc.p = stats::students_t_two_sided_p(pc.t, pc.dof);
       pc.z = z_from_two_sided_p(pc.p, pc.t);
       zc[c].push_back(pc.z);
+      signal[c] += unit_gain(pc.dof) * (s.sum_b[c] + 0.5 * s.d[c]) / std::sqrt(s.v[c]);
       sum_diff += s.d[c];
       sum_b += s.sum_b[c];
       if (pc.p < min_p) {
@@ -295,7 +352,7 @@ ImageCompareResult compare_tiled(const WelchImage& a, const WelchImage& b, doubl
         r.worst = pc;
       }
     }
-  finish_global_tests(r, zc, min_p, sum_diff, sum_b);
+  finish_global_tests(r, zc, min_p, sum_diff, sum_b, signal);
   return r;
 }
 
@@ -322,6 +379,7 @@ ImageCompareResult compare_welch_images(const WelchImage& a, const WelchImage& b
   const std::vector<Rgb> ga = r.skew_corrected ? pooled_skewness(a) : std::vector<Rgb>{};
   const std::vector<Rgb> gb = r.skew_corrected ? pooled_skewness(b) : std::vector<Rgb>{};
   std::vector<double> zc[3];
+  double signal[3] = {0.0, 0.0, 0.0};
   double min_p = 2.0, sum_diff = 0.0, sum_b = 0.0;
   for (size_t i = 0; i < a.pixels(); ++i) {
     const int64_t na = a.count[i], nb = b.count[i];
@@ -380,6 +438,7 @@ ImageCompareResult compare_welch_images(const WelchImage& a, const WelchImage& b
       pc.p = t.p_value;
       pc.z = z_from_two_sided_p(t.p_value, t.statistic);
       zc[c].push_back(pc.z);
+      signal[c] += unit_gain(t.dof) * 0.5 * (ma[c] + mb[c]) / std::sqrt(se2);
       sum_diff += ma[c] - mb[c];
       sum_b += mb[c];
       if (pc.p < min_p) {
@@ -388,7 +447,7 @@ ImageCompareResult compare_welch_images(const WelchImage& a, const WelchImage& b
       }
     }
   }
-  finish_global_tests(r, zc, min_p, sum_diff, sum_b);
+  finish_global_tests(r, zc, min_p, sum_diff, sum_b, signal);
   return r;
 }
 

@@ -36,7 +36,10 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -69,6 +72,8 @@ struct ImageCompareOptions {
   int fallback_tile = 8;         // kTiled, k = 0 and an image without third moments (older EXRs)
 };
 
+inline constexpr double kMdeNone = std::numeric_limits<double>::infinity();
+
 struct ImageCompareResult {
   double alpha = 0, alpha_each = 0, alpha_pixel = 0;
   bool skew_corrected = false;      // the transformation was applied
@@ -83,6 +88,25 @@ struct ImageCompareResult {
   stats::TestResult stouffer, sum_z2;  // of the channel with the smallest p; p Šidák-adjusted over 3
   int stouffer_channel = -1, sum_z2_channel = -1;
   double mean_relative_difference = 0;  // sum(mean_a - mean_b) / sum(mean_b), for messages
+  // Power: the smallest relative difference d between the two images' means, uniform over the
+  // image (mean_a = (1 + d) mean_b in every tested pixel or tile), that the Stouffer tests alone
+  // reject with 90% power at their level; the pixel-wise and sum z^2 tests only add power, so the
+  // whole comparison detects it at least as often. Unit i of a channel moves z_i by
+  // kappa(dof_i) d m_i / sigma_i (m_i the mean of the two means, sigma_i the true standard error
+  // of the difference, kappa = stats::t_to_z_slope); with the estimated se_i, 1 / sigma_i is
+  // estimated without bias by 1 / (se_i b(dof_i)), b = stats::inverse_sd_bias. So channel c's Z
+  // has mean d g_c with
+  //     g_c = sum_i kappa_i m_i / (se_i b_i) / sqrt(P_c)      (stouffer_gain),
+  // and is held to alpha_stouffer = Šidák(alpha_each, 3). The channels' Z are treated as
+  // independent (their pixels' noise is correlated in a render: then the true power is lower
+  // than stated by at most the difference to the best single channel, min_detectable_bias_channel).
+  // d solves 1 - prod_c (1 - z_test_power(d g_c, alpha_stouffer)) = 0.9 (uniform_bias_mde). Valid
+  // for a bias small against each unit's mean (the shift of z is linear there) and, with the skew
+  // correction, up to the correction's own change of slope. Infinite where no unit has signal.
+  double stouffer_gain[3] = {0.0, 0.0, 0.0};
+  double alpha_stouffer = 0.0;
+  double min_detectable_bias_channel[3] = {kMdeNone, kMdeNone, kMdeNone};
+  double min_detectable_relative_bias = kMdeNone;
   // Tiled test (ImageCompareOptions::test == kTiled). For kPixel, tile = 1 and the shifts are
   // still predicted when both images have third moments.
   bool tiled = false;
@@ -103,6 +127,15 @@ struct ImageCompareResult {
   std::string message() const;
   nlohmann::json details() const;
 };
+
+// The smallest d with 1 - prod_k (1 - z_test_power(d g_k, alpha_k)) >= power, for independent
+// two-sided z tests k whose statistics have mean d g_k (gain_alpha: the pairs (g_k, alpha_k));
+// infinite when every g_k is 0.
+double uniform_bias_mde(const std::vector<std::pair<double, double>>& gain_alpha, double power = 0.9);
+// "detects a uniform bias of 1.2% at 90% power" (or why none is detectable), for messages.
+std::string mde_phrase(double min_detectable_relative_bias);
+// The bias as JSON: a number, or null when infinite.
+nlohmann::json mde_json(double min_detectable_relative_bias);
 
 // Throws std::invalid_argument if the sizes differ or a pixel has fewer than two Welch samples
 // in both images.

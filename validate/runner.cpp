@@ -1,13 +1,18 @@
 #include "validate/runner.h"
 
+#include <algorithm>
 #include <chrono>
 #include <exception>
 #include <filesystem>
+#include <map>
+#include <utility>
+#include <vector>
 
 #include <fmt/format.h>
 
 #include "lib/core/atomic_file.h"
 #include "lib/core/hash.h"
+#include "validate/stats/tests.h"
 
 namespace tb {
 
@@ -115,6 +120,145 @@ RunSummary run_checks(const std::vector<const Check*>& checks, const RunOptions&
   s.results["failed"] = s.failed;
   s.results["interrupted"] = s.interrupted;
   return s;
+}
+
+nlohmann::json power_summary(const nlohmann::json& check_records, double target) {
+  struct Kind {
+    std::vector<std::pair<double, std::string>> mde;
+  };
+  std::map<std::string, Kind> kinds;
+  int64_t stated = 0, not_stated = 0;
+  for (const auto& rec : check_records) {
+    const std::string name = rec.value("name", "");
+    if (name.find("negative_control") != std::string::npos || !rec.contains("first")) continue;
+    const auto& r = rec["first"];
+    const auto v = r.value("min_detectable_effect", nlohmann::json());
+    if (!v.is_number()) {
+      ++not_stated;
+      continue;
+    }
+    ++stated;
+    kinds[r.value("effect_kind", "")].mde.emplace_back(v.get<double>(), name);
+  }
+  nlohmann::json out = {{"stated", stated}, {"not_stated", not_stated}, {"target", target}};
+  nlohmann::json jk = nlohmann::json::object();
+  for (auto& [kind, k] : kinds) {
+    std::sort(k.mde.begin(), k.mde.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    nlohmann::json above = nlohmann::json::array();
+    int64_t meet = 0;
+    for (const auto& [m, n] : k.mde) {
+      if (m <= target)
+        ++meet;
+      else
+        // A standard error falls as 1/sqrt(samples): (m / target)^2 the samples would reach the target.
+        above.push_back({{"name", n}, {"mde", m}, {"samples_scale_for_target", (m / target) * (m / target)}});
+    }
+    jk[kind] = {{"checks", k.mde.size()},
+                {"meet_target", meet},
+                {"median", k.mde[k.mde.size() / 2].first},
+                {"above_target", above}};
+  }
+  out["kinds"] = jk;
+  return out;
+}
+
+namespace {
+
+bool is_negative_control(const std::string& name) { return name.find("negative_control") != std::string::npos; }
+
+nlohmann::json rate(int64_t k, int64_t n) {
+  const stats::Interval ci = stats::binomial_interval(k, n, 0.95);
+  return {{"count", k}, {"runs", n}, {"rate", n > 0 ? double(k) / double(n) : 0.0}, {"ci95", {ci.lo, ci.hi}}};
+}
+
+}  // namespace
+
+nlohmann::json calibrate_checks(const std::vector<const Check*>& checks, const RunOptions& base, int seeds,
+                                const std::function<void(int, const RunSummary&)>& on_seed) {
+  struct Tally {
+    std::string kind;
+    int64_t runs = 0, first_rejections = 0, failures = 0;
+    double sum_alpha = 0.0;
+  };
+  std::map<std::string, Tally> tally;
+  int64_t seeds_done = 0, seeds_failed = 0, seeds_first_rejected = 0;
+  bool interrupted = false;
+  nlohmann::json out;
+  const auto summarise = [&] {
+    nlohmann::json per = nlohmann::json::array();
+    double bound_fail = 0.0, expected_first = 0.0;
+    for (const Check* c : checks) {
+      const auto it = tally.find(c->name);
+      if (it == tally.end()) continue;
+      const Tally& t = it->second;
+      const bool control = is_negative_control(c->name);
+      const double alpha = t.runs > 0 ? t.sum_alpha / double(t.runs) : 0.0;
+      nlohmann::json j = {{"name", c->name}, {"kind", t.kind}, {"negative_control", control}, {"alpha", alpha}};
+      if (control) {
+        j["missed"] = rate(t.failures, t.runs);
+      } else {
+        j["first_attempt_rejected"] = rate(t.first_rejections, t.runs);
+        j["failed"] = rate(t.failures, t.runs);
+        if (t.kind == "statistical") {
+          bound_fail += alpha * alpha;
+          expected_first += alpha;
+        }
+      }
+      per.push_back(std::move(j));
+    }
+    out = {{"config", {{"first_seed", base.seed}, {"seeds", seeds}, {"full", base.full}, {"checks", checks.size()}}},
+           {"seeds_done", seeds_done},
+           {"interrupted", interrupted},
+           {"suite_failed", rate(seeds_failed, seeds_done)},
+           {"suite_first_attempt_rejected", rate(seeds_first_rejected, seeds_done)},
+           {"bound_suite_failure", bound_fail},
+           {"expected_first_attempt_rejections_per_run", expected_first},
+           {"checks", per}};
+    if (!base.out_dir.empty())
+      write_file_atomic((std::filesystem::path(base.out_dir) / "calibrate.json").string(), out.dump(1));
+  };
+  for (int k = 0; k < seeds; ++k) {
+    RunOptions opt = base;
+    opt.seed = base.seed + uint64_t(k);
+    if (!base.out_dir.empty())
+      opt.out_dir = (std::filesystem::path(base.out_dir) / "calibrate" / fmt::format("seed-{}", opt.seed)).string();
+    const RunSummary s = run_checks(checks, opt);
+    if (s.interrupted) {
+      interrupted = true;
+      break;
+    }
+    bool any_fail = false, any_first = false;
+    for (const auto& rec : s.results["checks"]) {
+      const std::string name = rec.value("name", "");
+      Tally& t = tally[name];
+      t.kind = rec.value("kind", "");
+      ++t.runs;
+      const bool first_ok = rec.value("verdict", "") == "pass";
+      const bool failed = !rec.value("passed", false);
+      t.first_rejections += first_ok ? 0 : 1;
+      t.failures += failed ? 1 : 0;
+      // The check's own level: its family alpha where the record gives one (checks whose alpha
+      // field is the per-case level after a correction), else its alpha.
+      if (rec.contains("first")) {
+        const auto& f = rec["first"];
+        const auto& d = f.contains("details") ? f["details"] : nlohmann::json::object();
+        t.sum_alpha += d.is_object() && d.contains("family_alpha") && d["family_alpha"].is_number()
+                           ? d["family_alpha"].get<double>()
+                           : f.value("alpha", 0.0);
+      }
+      if (!is_negative_control(name)) {
+        any_fail = any_fail || failed;
+        any_first = any_first || !first_ok;
+      }
+    }
+    ++seeds_done;
+    seeds_failed += any_fail ? 1 : 0;
+    seeds_first_rejected += any_first ? 1 : 0;
+    summarise();
+    if (on_seed) on_seed(k, s);
+  }
+  summarise();
+  return out;
 }
 
 }  // namespace tb

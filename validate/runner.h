@@ -49,4 +49,26 @@ struct RunSummary {
 
 RunSummary run_checks(const std::vector<const Check*>& checks, const RunOptions& opt);
 
+// `tb check --calibrate K` (docs/statistics.md, "The suite's false-alarm rate"): runs the checks
+// under K run seeds (base.seed, base.seed + 1, ...; records of seed s under
+// base.out_dir/calibrate/seed-s, so an interrupted calibration resumes with base.resume) and
+// measures, with 95% Clopper-Pearson intervals: per check, the rate of first-attempt rejections
+// and of final failures (after the rerun); for negative controls, the rate at which they are
+// missed; for the suite, the rate of seeds on which any check (controls aside) fails. It also
+// states the bound by construction: under H0 the two attempts are independent, so a check fails
+// with probability alpha_first * alpha_rerun and the suite with at most the sum over checks.
+// on_seed is called after each seed with its summary; the result is rewritten after each seed
+// to base.out_dir/calibrate.json when base.out_dir is set.
+nlohmann::json calibrate_checks(const std::vector<const Check*>& checks, const RunOptions& base, int seeds,
+                                const std::function<void(int, const RunSummary&)>& on_seed = {});
+
+// The power of a run's checks (docs/statistics.md, "What a passing check rules out"): how many
+// state their minimum detectable effect (CheckResult::min_detectable_effect, of the first
+// attempt), and, per effect kind, how many detect `target` (default 2%) at 90% power and which
+// do not, largest first: {"stated": n, "not_stated": n, "target": t, "kinds": {kind: {"checks": n,
+// "meet_target": n, "median": m, "above_target": [{"name", "mde", "samples_scale_for_target"}...]}}}
+// (the factor on the samples that would reach the target, (mde / target)^2). Negative controls are
+// left out (their job is to be rejected, not to bound a bias).
+nlohmann::json power_summary(const nlohmann::json& check_records, double target = 0.02);
+
 }  // namespace tb

@@ -1,6 +1,8 @@
 #include "validate/runner.h"
 
+#include <cmath>
 #include <filesystem>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -122,6 +124,113 @@ TEST(AtomicFile, WritesAndReadsBack) {
   write_file_atomic(p, "again");
   EXPECT_EQ(read_file(p), "again");
   EXPECT_THROW(read_file(p + ".missing"), std::runtime_error);
+}
+
+// The power census: records from run_one with and without a stated effect, a negative control
+// (left out), and the ordering and sample factors of the checks above the 2% target.
+TEST(Runner, PowerSummaryCountsStatedEffectsAndNamesTheWeakest) {
+  const auto check_with = [](std::string name, double mde) {
+    return make_check(std::move(name), CheckKind::kStatistical, [mde](const CheckContext&) {
+      CheckResult r;
+      r.passed = true;
+      r.p_value = 0.5;
+      r.alpha = 0.01;
+      r.min_detectable_effect = mde;
+      if (std::isfinite(mde)) r.effect_kind = "uniform relative bias of the image";
+      return r;
+    });
+  };
+  RunOptions opt;
+  nlohmann::json records = nlohmann::json::array();
+  records.push_back(run_one(check_with("a.ok", 0.01), opt));
+  records.push_back(run_one(check_with("a.weak", 0.04), opt));
+  records.push_back(run_one(check_with("a.weaker", 0.06), opt));
+  records.push_back(run_one(check_with("a.unstated", std::numeric_limits<double>::infinity()), opt));
+  records.push_back(run_one(check_with("a.negative_control.x", 0.5), opt));
+  const nlohmann::json p = power_summary(records, 0.02);
+  EXPECT_EQ(p["stated"], 3);
+  EXPECT_EQ(p["not_stated"], 1);
+  const auto& k = p["kinds"]["uniform relative bias of the image"];
+  EXPECT_EQ(k["checks"], 3);
+  EXPECT_EQ(k["meet_target"], 1);
+  EXPECT_DOUBLE_EQ(k["median"].get<double>(), 0.04);
+  ASSERT_EQ(k["above_target"].size(), 2u);
+  EXPECT_EQ(k["above_target"][0]["name"], "a.weaker");
+  EXPECT_NEAR(k["above_target"][0]["samples_scale_for_target"].get<double>(), 9.0, 1e-12);
+  EXPECT_NEAR(k["above_target"][1]["samples_scale_for_target"].get<double>(), 4.0, 1e-12);
+  // The record itself carries the statement (null when not stated).
+  EXPECT_DOUBLE_EQ(records[0]["first"]["min_detectable_effect"].get<double>(), 0.01);
+  EXPECT_TRUE(records[3]["first"]["min_detectable_effect"].is_null());
+}
+
+// --calibrate: a check that rejects on a known set of seeds (first attempt only, so the rerun
+// passes), one that fails outright on some, a negative control that is missed on some; counts,
+// suite rates, the alpha^2 bound and the resumable per-seed records.
+TEST(Runner, CalibrateCountsRejectionsPerCheckAndForTheSuite) {
+  const auto seed_bit = [](const CheckContext& ctx, int bit) { return ((ctx.seed >> bit) & 1u) != 0; };
+  const Check flaky = make_check("c.flaky", CheckKind::kStatistical, [&](const CheckContext& ctx) {
+    CheckResult r;
+    r.alpha = 0.01;
+    r.passed = ctx.sample_scale > 1.0 || !seed_bit(ctx, 3);  // first attempt rejects on about half the seeds
+    return r;
+  });
+  const Check broken = make_check("c.broken", CheckKind::kStatistical, [&](const CheckContext& ctx) {
+    CheckResult r;
+    r.alpha = 0.02;
+    r.details["family_alpha"] = 0.05;  // the family level is what counts
+    r.passed = !seed_bit(ctx, 5) && ctx.sample_scale == 1.0;  // rejected on both attempts on some seeds
+    return r;
+  });
+  const Check control = make_check("c.negative_control.x", CheckKind::kStatistical, [&](const CheckContext& ctx) {
+    CheckResult r;
+    r.alpha = 0.01;
+    r.passed = !seed_bit(ctx, 7);  // caught unless the bit is set (on both attempts: derived from one run seed)
+    return r;
+  });
+  const std::string dir = (std::filesystem::temp_directory_path() / "tb_runner_calibrate_test").string();
+  std::filesystem::remove_all(dir);
+  RunOptions opt;
+  opt.seed = 10;
+  opt.out_dir = dir;
+  const std::vector<const Check*> checks{&flaky, &broken, &control};
+  const nlohmann::json j = calibrate_checks(checks, opt, 12);
+  // Recount directly from the seeds the runner derives.
+  int64_t flaky_first = 0, broken_fail = 0, control_missed = 0, suite_fail = 0, suite_first = 0;
+  for (uint64_t s = 10; s < 22; ++s) {
+    CheckContext c0;
+    c0.seed = check_seed(s, "c.flaky", 0);
+    const bool f = seed_bit(c0, 3);
+    CheckContext b0;
+    b0.seed = check_seed(s, "c.broken", 0);
+    const bool b_rejects_first = seed_bit(b0, 5);
+    const bool b_fail = b_rejects_first;  // its rerun (sample_scale 4) always rejects
+    CheckContext n0, n1;
+    n0.seed = check_seed(s, "c.negative_control.x", 0);
+    n1.seed = check_seed(s, "c.negative_control.x", 1);
+    const bool missed = seed_bit(n0, 7) && seed_bit(n1, 7);
+    flaky_first += f;
+    broken_fail += b_fail;
+    control_missed += missed;
+    suite_fail += b_fail;
+    suite_first += f || b_rejects_first;
+  }
+  EXPECT_EQ(j["seeds_done"], 12);
+  const auto& per = j["checks"];
+  ASSERT_EQ(per.size(), 3u);
+  EXPECT_EQ(per[0]["first_attempt_rejected"]["count"], flaky_first);
+  EXPECT_EQ(per[0]["failed"]["count"], 0);
+  EXPECT_EQ(per[1]["failed"]["count"], broken_fail);
+  EXPECT_DOUBLE_EQ(per[1]["alpha"].get<double>(), 0.05);
+  EXPECT_EQ(per[2]["missed"]["count"], control_missed);
+  EXPECT_EQ(j["suite_failed"]["count"], suite_fail);
+  EXPECT_EQ(j["suite_first_attempt_rejected"]["count"], suite_first);
+  EXPECT_NEAR(j["bound_suite_failure"].get<double>(), 0.01 * 0.01 + 0.05 * 0.05, 1e-15);
+  EXPECT_GT(flaky_first, 0);
+  EXPECT_LT(flaky_first, 12);
+  // Each seed's records are kept, and the summary is on disk.
+  EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(dir) / "calibrate" / "seed-15" / "records" / "c.flaky.json"));
+  EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(dir) / "calibrate.json"));
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

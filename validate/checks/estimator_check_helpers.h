@@ -135,6 +135,8 @@ inline CheckResult unbiased_family(const CheckContext& ctx, const std::vector<Un
   res.details["batches"] = batches;
   res.details["realisations_per_case"] = realisations;
   res.details["worst_relative_min_detectable_bias_90pct_power"] = worst_mdb_rel;
+  res.min_detectable_effect = worst_mdb_rel;
+  res.effect_kind = "relative bias of the estimate (worst case)";
   if (res.passed)
     res.message = fmt::format("{} {} pairs unbiased (t-test of {} batch means, alpha' = {:.2g}); smallest p = "
                               "{:.3g} ({}); detectable relative bias at 90% power <= {:.2g}",

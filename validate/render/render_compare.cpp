@@ -211,12 +211,20 @@ std::string ChannelCompare::message() const {
   std::string rel;
   for (int c = 0; c < 3; ++c) rel += fmt::format("{}{} {:+.3g}", c ? ", " : "", names[c], channel[c].mean_relative_difference);
   const int w = worst_channel();
-  return fmt::format("{} (p={:.3g}); mean rel. diff {}; worst channel {}: {}", rejects() ? "different" : "consistent",
-                     p_value(), rel, names[w], channel[w].message());
+  return fmt::format("{} (p={:.3g}); mean rel. diff {}; {}; worst channel {}: {}", rejects() ? "different" : "consistent",
+                     p_value(), rel, mde_phrase(min_detectable_relative_bias()), names[w], channel[w].message());
+}
+
+double ChannelCompare::min_detectable_relative_bias() const {
+  // Each channel's comparison holds one channel (the others are skipped there).
+  std::vector<std::pair<double, double>> gains;
+  for (int c = 0; c < 3; ++c) gains.emplace_back(channel[c].stouffer_gain[c], channel[c].alpha_stouffer);
+  return uniform_bias_mde(gains);
 }
 
 nlohmann::json ChannelCompare::details() const {
-  nlohmann::json j = {{"alpha", alpha}, {"p_value", p_value()}, {"rejects", rejects()}};
+  nlohmann::json j = {{"alpha", alpha}, {"p_value", p_value()}, {"rejects", rejects()},
+                      {"min_detectable_relative_bias", mde_json(min_detectable_relative_bias())}};
   const char* names[3] = {"R", "G", "B"};
   for (int c = 0; c < 3; ++c) j[names[c]] = channel[c].details();
   return j;
@@ -262,6 +270,8 @@ CheckResult compare_record(const ChannelCompare& c, bool expect_reject, const st
   r.message = fmt::format("{}{}: {}{}", expect_reject ? "negative control (must be rejected): " : "", what,
                           expect_reject ? (c.rejects() ? "caught, " : "NOT caught, ") : "", c.message());
   r.details["compare"] = c.details();
+  r.min_detectable_effect = c.min_detectable_relative_bias();
+  r.effect_kind = "uniform relative bias of the image";
   return r;
 }
 

@@ -4,12 +4,15 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include <boost/math/distributions/binomial.hpp>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/non_central_t.hpp>
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/distributions/students_t.hpp>
+#include <boost/math/quadrature/gauss_kronrod.hpp>
 #include <boost/math/tools/roots.hpp>
 
 namespace tb::stats {
@@ -198,6 +201,51 @@ double minimal_detectable_shift(double alpha, double power) {
 
 double minimal_detectable_bias(double std_error, double alpha, double power) {
   return minimal_detectable_shift(alpha, power) * std_error;
+}
+
+namespace {
+
+double t_to_z_slope_exact(double dof) {
+  const bm::students_t_distribution<double> st(dof);
+  const bm::normal_distribution<double> n;
+  const auto mean_z = [&](double delta) {
+    const bm::non_central_t_distribution<double> nct(dof, delta);
+    const auto f = [&](double t) {
+      const double F = bm::cdf(st, t);
+      if (!(F > 0.0 && F < 1.0)) return 0.0;
+      return bm::quantile(n, F) * bm::pdf(nct, t);
+    };
+    return bm::quadrature::gauss_kronrod<double, 61>::integrate(f, -200.0, 200.0, 15, 1e-10);
+  };
+  constexpr double h = 0.02;  // central difference; E[z] is odd and smooth in delta
+  return (mean_z(h) - mean_z(-h)) / (2.0 * h);
+}
+
+}  // namespace
+
+double inverse_sd_bias(double dof) {
+  if (!(dof > 1.0)) return std::numeric_limits<double>::infinity();
+  if (dof > 1e7) return 1.0;
+  return std::exp(0.5 * std::log(0.5 * dof) + std::lgamma(0.5 * (dof - 1.0)) - std::lgamma(0.5 * dof));
+}
+
+double t_to_z_slope(double dof) {
+  if (!(dof > 0.0)) return 0.0;
+  // Grid in u = 1/dof; u = 0 is the normal limit (slope 1).
+  static const std::vector<std::pair<double, double>> grid = [] {
+    std::vector<std::pair<double, double>> g{{0.0, 1.0}};
+    for (double d : {200.0, 100.0, 50.0, 30.0, 20.0, 15.0, 10.0, 7.0, 5.0, 4.0, 3.0, 2.5, 2.0, 1.5, 1.0})
+      g.emplace_back(1.0 / d, t_to_z_slope_exact(d));
+    return g;
+  }();
+  const double u = std::min(1.0, 1.0 / dof);
+  for (size_t i = 1; i < grid.size(); ++i)
+    if (u <= grid[i].first) {
+      const auto& [u0, k0] = grid[i - 1];
+      const auto& [u1, k1] = grid[i];
+      return k0 + (k1 - k0) * (u - u0) / (u1 - u0);
+    }
+  return grid.back().second;  // dof < 1: the dof-1 slope (no test here uses fewer)
 }
 
 }  // namespace tb::stats
