@@ -18,6 +18,12 @@
 
 namespace tb {
 
+inline constexpr double kRerunAlphaFactor = 0.05;
+
+// Controls (a broken variant that must be caught): names containing "negative_control" or
+// ".control."; they pass by rejecting, so the power and false-alarm figures leave them out.
+bool is_control_check(const std::string& name);
+
 struct RunOptions {
   uint64_t seed = 1;
   bool full = false;
@@ -29,6 +35,12 @@ struct RunOptions {
   // Progress of the running check in [0, 1]; may be called from any thread.
   std::function<void(double)> on_progress = [](double) {};
   const std::atomic<bool>* interrupted = nullptr;  // stop between checks when set
+  // The rerun's level is this factor times the check's alpha (docs/statistics.md, "The suite's
+  // false-alarm rate"): under H0 a check then fails with probability <= factor alpha^2, and the
+  // quick suite's sum of alpha^2 (0.0129) gives a suite-level rate <= 6.4e-4 by construction.
+  // Applied where the rerun's rejection is by its p-value (p < alpha recorded) and the check is
+  // not a control; any other rejection of the rerun fails the check as before.
+  double rerun_alpha_factor = kRerunAlphaFactor;
 };
 
 // The seed a check's context receives for a given run seed and attempt.
@@ -56,7 +68,7 @@ RunSummary run_checks(const std::vector<const Check*>& checks, const RunOptions&
 // and of final failures (after the rerun); for negative controls, the rate at which they are
 // missed; for the suite, the rate of seeds on which any check (controls aside) fails. It also
 // states the bound by construction: under H0 the two attempts are independent, so a check fails
-// with probability alpha_first * alpha_rerun and the suite with at most the sum over checks.
+// with probability alpha * (rerun_alpha_factor alpha) and the suite with at most the sum.
 // on_seed is called after each seed with its summary; the result is rewritten after each seed
 // to base.out_dir/calibrate.json when base.out_dir is set.
 nlohmann::json calibrate_checks(const std::vector<const Check*>& checks, const RunOptions& base, int seeds,

@@ -224,13 +224,45 @@ TEST(Runner, CalibrateCountsRejectionsPerCheckAndForTheSuite) {
   EXPECT_EQ(per[2]["missed"]["count"], control_missed);
   EXPECT_EQ(j["suite_failed"]["count"], suite_fail);
   EXPECT_EQ(j["suite_first_attempt_rejected"]["count"], suite_first);
-  EXPECT_NEAR(j["bound_suite_failure"].get<double>(), 0.01 * 0.01 + 0.05 * 0.05, 1e-15);
+  EXPECT_NEAR(j["bound_suite_failure"].get<double>(), kRerunAlphaFactor * (0.01 * 0.01 + 0.05 * 0.05), 1e-15);
   EXPECT_GT(flaky_first, 0);
   EXPECT_LT(flaky_first, 12);
   // Each seed's records are kept, and the summary is on disk.
   EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(dir) / "calibrate" / "seed-15" / "records" / "c.flaky.json"));
   EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(dir) / "calibrate.json"));
   std::filesystem::remove_all(dir);
+}
+
+// The rerun is judged at kRerunAlphaFactor times the check's alpha when its rejection is by its
+// p-value; a rejection for another reason (p at or above alpha, no p), a p below the rerun level,
+// and controls keep failing.
+TEST(Runner, RerunIsJudgedAtTheRerunLevel) {
+  const auto with_rerun = [](std::string name, double rerun_p, bool p_rejects = true) {
+    return make_check(std::move(name), CheckKind::kStatistical, [=](const CheckContext& ctx) {
+      CheckResult r;
+      r.alpha = 0.01;
+      r.p_value = ctx.sample_scale > 1.0 ? rerun_p : 1e-6;
+      r.passed = !p_rejects ? false : r.p_value >= r.alpha;
+      return r;
+    });
+  };
+  RunOptions opt;
+  const double level = kRerunAlphaFactor * 0.01;
+  EXPECT_EQ(run_one(with_rerun("r.between", 2.0 * level), opt)["verdict"], "pass-on-rerun");
+  EXPECT_TRUE(run_one(with_rerun("r.between", 2.0 * level), opt).value("rerun_passed_at_rerun_level", false));
+  EXPECT_EQ(run_one(with_rerun("r.below", 0.5 * level), opt)["verdict"], "fail");
+  EXPECT_EQ(run_one(with_rerun("r.other_reason", 0.5, false), opt)["verdict"], "fail");
+  EXPECT_EQ(run_one(with_rerun("r.negative_control.x", 2.0 * level), opt)["verdict"], "fail");
+  EXPECT_EQ(run_one(with_rerun("r.control.x", 2.0 * level), opt)["verdict"], "fail");
+  // The reproducer of the rerun (--attempt 1) gives the same verdict.
+  RunOptions direct;
+  direct.attempt = 1;
+  EXPECT_TRUE(run_one(with_rerun("r.between", 2.0 * level), direct).value("passed", false));
+  EXPECT_FALSE(run_one(with_rerun("r.below", 0.5 * level), direct).value("passed", true));
+  // Negative control of the policy: with the factor 1 the first case fails as before.
+  RunOptions plain;
+  plain.rerun_alpha_factor = 1.0;
+  EXPECT_EQ(run_one(with_rerun("r.between", 2.0 * level), plain)["verdict"], "fail");
 }
 
 }  // namespace
