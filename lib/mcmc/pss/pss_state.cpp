@@ -137,8 +137,6 @@ inline double standard_normal(Rng& rng) {
 
 }  // namespace
 
-double PssState::gaussian() { return standard_normal(rng_); }
-
 void PssState::ensure_ready(size_t i) {
   if (i >= x_.size()) x_.resize(i + 1);
   Coordinate& c = x_[i];

@@ -132,8 +132,7 @@ class PssState final : public StreamUniforms {
     double backup_value = 0.0;
     int64_t backup_modified = -1;
   };
-  void ensure_ready(size_t i);
-  double gaussian();
+  void ensure_ready(size_t i);  // normals by the ziggurat of pss_state.cpp (Marsaglia & Tsang 2000)
 
   Rng rng_;
   double sigma_;
