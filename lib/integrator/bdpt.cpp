@@ -11,7 +11,8 @@ int generate_camera_subpath(const PathContext& ctx, const Vec2& raster, const Ve
   path->clear();
   if (max_vertices < 1) return 0;
   const Camera& cam = ctx.world->camera();
-  const CameraRay cr = cam.generate_ray(raster, lens_u);
+  // No differentials: the subpath never reads them (the same ray, a third of the camera's work).
+  const CameraPrimaryRay cr = cam.generate_primary_ray(raster, lens_u);
   if (!(cr.weight > 0)) return 0;
   PathVertex z0;
   z0.kind = VertexKind::kCamera;
@@ -21,7 +22,7 @@ int generate_camera_subpath(const PathContext& ctx, const Vec2& raster, const Ve
   z0.pdf_fwd = p.pos;
   z0.beta = Rgb(cr.weight);
   path->push_back(z0);
-  random_walk(ctx, rng, static_cast<const Ray&>(cr.ray), z0.beta, static_cast<size_t>(max_vertices),
+  random_walk(ctx, rng, cr.ray, z0.beta, static_cast<size_t>(max_vertices),
               TransportMode::kRadiance, path);
   return static_cast<int>(path->size());
 }

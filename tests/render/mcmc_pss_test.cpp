@@ -100,6 +100,33 @@ TEST(PssState, RejectRestoresAcceptKeeps) {
   for (size_t i = 0; i < y.size(); ++i) EXPECT_LT(std::abs(circ(x0[i], y[i])), 12 * kSigma);
 }
 
+// The small step's normals (the ziggurat of pss_state.cpp, Marsaglia & Tsang 2000): one
+// coordinate at 0.5 perturbed by sigma z and rejected, 10^6 times (the wrap is unreachable:
+// |z| would have to exceed 10). KS of z against N(0, 1), alpha 0.01, and the share of |z| beyond
+// the ziggurat's tail start R = 3.4426 (the tail branch, 5.8e-4 of the draws) against its exact
+// probability, 99% Clopper-Pearson. Negative control: the same KS against N(0, 1.01^2) (a 1%
+// scale error) must reject.
+TEST(PssState, SmallStepNormalsAreStandardNormal) {
+  constexpr double sigma = 0.05, R = 3.442619855899;
+  constexpr int64_t n = 1000000;
+  PssState s = PssState::at({0.5}, Rng::for_sample(0x5eed, 0x2167, 7), sigma);
+  std::vector<double> z;
+  z.reserve(n);
+  int64_t tail = 0;
+  for (int64_t k = 0; k < n; ++k) {
+    s.start_iteration(false);
+    z.push_back((s.next() - 0.5) / sigma);
+    tail += std::abs(z.back()) > R;
+    s.reject();
+  }
+  const auto ks = stats::ks_test(z, [](double v) { return stats::normal_cdf(v); });
+  EXPECT_FALSE(ks.rejects(0.01)) << "D = " << ks.statistic << ", p = " << ks.p_value;
+  const double p_tail = 2.0 * (1.0 - stats::normal_cdf(R));
+  EXPECT_TRUE(stats::binomial_interval(tail, n, 0.99).contains(p_tail)) << tail << " of " << n << " beyond R";
+  const auto wide = stats::ks_test(z, [](double v) { return stats::normal_cdf(v / 1.01); });
+  EXPECT_TRUE(wide.rejects(0.01)) << "negative control: p = " << wide.p_value;
+}
+
 // Lazy = eager in distribution: a coordinate left unread for n accepted small steps (with
 // rejected iterations in between, which do not count) moves by a wrapped N(0, n sigma^2), exactly
 // as a coordinate read, hence perturbed, at every accepted iteration. KS against the normal CDF

@@ -377,7 +377,8 @@ int64_t run_pss(const SampleFunction& f_in, const RenderSettings& st, const PssS
   auto bootstrap = [&](uint64_t key, uint64_t base) {
     parallel_for(static_cast<size_t>(boot_n), [&](size_t i) {
       thread_local std::vector<Splat> sp;
-      PssState s(Rng::for_sample(st.seed, key, base + i), pss.sigma);
+      thread_local PssState s(Rng(), pss.sigma);  // storage reused across samples
+      s.reset(Rng::for_sample(st.seed, key, base + i), pss.sigma);
       bool nonfinite = false;
       boot[i] = evaluate(f, pss.target, static_cast<int>(static_cast<int64_t>(i) / per_level), s, &sp, &nonfinite);
       boot_nonfinite[i] = nonfinite;
@@ -457,7 +458,7 @@ int64_t run_pss(const SampleFunction& f_in, const RenderSettings& st, const PssS
         const auto it = std::upper_bound(cdf.begin() + lo, cdf.begin() + hi, u);
         const int64_t j = std::min<int64_t>(it - cdf.begin(), hi - 1);
         c.level = static_cast<int>(j / per_level);
-        c.state = PssState(Rng::for_sample(st.seed, kBootstrapKey, boot_base + static_cast<uint64_t>(j)), pss.sigma);
+        c.state.reset(Rng::for_sample(st.seed, kBootstrapKey, boot_base + static_cast<uint64_t>(j)), pss.sigma);
         bool nonfinite = false;  // sample j was finite in the bootstrap: regenerated exactly
         c.i_current = evaluate(f, pss.target, c.level, c.state, &c.current, &nonfinite);
         c.state.commit_reads();

@@ -79,6 +79,9 @@ class PssState final : public StreamUniforms {
   // The state at a given point u (every coordinate current at iteration 0): the dense form of the
   // mutations (pss_kernel.h) runs the same lazy updates from it.
   static PssState at(const std::vector<double>& u, Rng rng, double sigma);
+  // Back to the state of PssState(rng, sigma), keeping the storage (the driver's bootstrap reuses
+  // one state per thread instead of allocating one per sample).
+  void reset(Rng rng, double sigma);
 
   // Starts proposing: iteration n + 1 with a large or a small step. Rewinds the streams.
   // sigma_shared: the rescaled small step's sigma(x) for D(x) ∩ D(y) (ignored unless rescaled).
@@ -109,7 +112,6 @@ class PssState final : public StreamUniforms {
   // that sample with the bootstrap's stream, then mutates with its own).
   void set_rng(const Rng& rng) {
     rng_ = rng;
-    has_spare_ = false;
   }
 
   // Introspection (tests, checks).
@@ -130,14 +132,14 @@ class PssState final : public StreamUniforms {
     double backup_value = 0.0;
     int64_t backup_modified = -1;
   };
-  void ensure_ready(size_t i);
-  double gaussian();
+  void ensure_ready(size_t i);  // normals by the ziggurat of pss_state.cpp (Marsaglia & Tsang 2000)
 
   Rng rng_;
-  double spare_ = 0.0;  // the second normal of the last polar-method pair (gaussian)
-  bool has_spare_ = false;
   double sigma_;
   std::vector<Coordinate> x_;
+  // Coordinates modified in the current iteration (each once): reject() restores these only,
+  // instead of scanning every coordinate of the state.
+  std::vector<uint32_t> touched_;
   int64_t iteration_ = 0;
   int64_t last_large_ = 0;  // last accepted large step (iteration 0: the initial draw)
   bool large_ = false;      // iteration 0 is the initial draw: no mutation applied
