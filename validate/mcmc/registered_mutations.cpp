@@ -528,7 +528,7 @@ CheckResult path_registered_mutations_chi2(const CheckContext& ctx, const std::s
             o.samples = ctx.size(proj->quick_samples, proj->full_samples);
             o.seed = ctx.seed;
             o.key = hash_values(hash_string(name + "." + mn + "." + file), static_cast<uint64_t>(configs));
-            o.quadrature_max_depth = 3;  // charts cut by the image border and occluders: keep refinement cheap
+            o.quadrature_max_depth = proj->quadrature_max_depth;
             tests.push_back({mn, file, p->label(),
                              chi2_test(Chi2Domain::rectangle(p->chart_lo(), p->chart_hi(), proj->cells_x, proj->cells_y),
                                        [&p](Uniforms& u) { return p->sample(u); },

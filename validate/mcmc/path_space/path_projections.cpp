@@ -6,6 +6,9 @@
 #include <fmt/format.h>
 
 #include "estimators/mcmc/mutation.h"
+#include "lib/core/frame.h"
+#include "lib/core/hash.h"
+#include "lib/geometry/spawn.h"
 #include "lib/mcmc/path_space/start_paths.h"
 #include "validate/mcmc/path_space/proposal_projections.h"
 
@@ -66,13 +69,46 @@ std::vector<MltPath> paths_of_lengths(const PathContext& ctx, std::initializer_l
   return out;
 }
 
+// Is no other surface within r of v, along 8 directions 10 degrees above its tangent plane?
+bool clear_of_corners(const PathContext& ctx, const PathVertex& v, double r) {
+  if (v.kind != VertexKind::kSurface) return true;
+  const Frame f = Frame::from_z(v.hit.ng);
+  for (int i = 0; i < 8; ++i) {
+    const double phi = 2 * kPi * i / 8, e = 10.0 * kPi / 180.0;
+    for (const double side : {1.0, -1.0}) {
+      const Vec3 w = f.to_world(Vec3(std::cos(e) * std::cos(phi), std::cos(e) * std::sin(phi), side * std::sin(e)));
+      const auto h = ctx.world->geometry().intersect(spawn_ray(v.hit, w));
+      if (h && glm::length(h->p - v.hit.p) < r) return false;
+    }
+  }
+  return true;
+}
+
+// Bidirectional test paths: k = 3, 4, their kept neighbours x_{k-3} and x_{k-1} of the new vertex
+// at least 5 % of the scene's bounding diameter from any other surface. Near a corner the area
+// density of a vertex added from x_{k-1} (or x_{k-3}) has a 1 / d^2 peak on the adjacent surface
+// so narrow that the Gauss-Kronrod rules of the expected counts do not see it (their error
+// estimate agrees on the flanks); measured at seed 10 before this restriction.
+std::vector<MltPath> bidir_paths(const PathContext& ctx, uint64_t seed) {
+  std::vector<MltPath> out;
+  const double r = 0.1 * ctx.world->bounds().radius;
+  for (int k : {3, 4})
+    for (uint64_t i = 0;; ++i) {
+      const MltPath x = path_with_segments(ctx, k, kMaxDepth, hash_values(seed, static_cast<uint64_t>(k), i));
+      if (clear_of_corners(ctx, x.v[k - 3], r) && clear_of_corners(ctx, x.v[k - 1], r)) {
+        out.push_back(x);
+        break;
+      }
+    }
+  return out;
+}
+
 std::vector<PathProjectionInfo>& table() {
   static std::vector<PathProjectionInfo> t = {
       {.name = "bidirectional",
        .coordinate = "direction x_{k-3} -> y_{k-2} of the one-vertex way (phi, cos theta)",
        .scenes = {"cornell-box.json"},
-       .paths = [](const PathContext& ctx, const PathMutation&,
-                   uint64_t seed) { return paths_of_lengths(ctx, {3, 4}, seed); },
+       .paths = [](const PathContext& ctx, const PathMutation&, uint64_t seed) { return bidir_paths(ctx, seed); },
        .make = [](const PathProjectionInput& in, const MltPath& x) -> PathProjectionList {
          BidirChart c(BidirVertexProjection{&in.checked, &in.ctx, &concrete<BidirectionalMutation>(in.registered), x},
                       fmt::format("k={}", x.segments()));
@@ -80,8 +116,11 @@ std::vector<PathProjectionInfo>& table() {
          out.push_back(std::make_unique<const BidirChart>(std::move(c)));
          return out;
        },
-       .cells_x = 25,
-       .cells_y = 13,
+       // Coarse cells: the support (f > 0, seen from x_{k-3}) is cut by shadow and surface edges,
+       // and a cell holding only a sliver of it can miss every node of the expected counts'
+       // quadrature (zero expected, a hard failure); measured: at 25 x 13 cells seed 6 failed so.
+       .cells_x = 13,
+       .cells_y = 7,
        // About 5 % of the whole mutation's proposals take the one-vertex way with f(y) > 0.
        .quick_samples = 300000,
        .full_samples = 3000000},

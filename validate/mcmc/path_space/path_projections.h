@@ -69,6 +69,9 @@ struct PathProjectionInfo {
   std::function<PathProjectionList(const PathProjectionInput&, const MltPath& x)> make = {};
   int cells_x = 25, cells_y = 25;
   int64_t quick_samples = 40000, full_samples = 400000;
+  // Bisections per level of the expected counts' quadrature (sampler_chi2.h): 3 keeps cells cut
+  // by the image border cheap; more where the stated density has an integrable peak.
+  int quadrature_max_depth = 3;
   int configs_per_scene = 0;  // at most this many configurations per scene (0: every one)
   // Non-empty: the mutation is declared to have no projection, for this reason (printed).
   std::string no_projection_reason = {};
