@@ -1,8 +1,13 @@
 // A new mutation is one class and one registration: registered at run time here, it is picked up
 // by the checks that loop over the registries (validate/mcmc/registered_mutations.h, the functions
 // behind mcmc.pss.cornell.registered_mutations.{pairwise,chi2}, mlt.path_space.registered_mutations.pairwise
-// and mlt.path_space.registered_mutations.flux_bins), and by the renderers' drivers.
+// mlt.path_space.registered_mutations.flux_bins and, with its declared projection,
+// mlt.path_space.registered_mutations.chi2), and by the renderers' drivers.
 #include <cmath>
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <vector>
 #include <limits>
 #include <memory>
 #include <string>
@@ -14,6 +19,8 @@
 #include "lib/mcmc/path_space/path_mutations.h"
 #include "lib/mcmc/pss/pss_driver.h"
 #include "lib/mcmc/pss/pss_steps.h"
+#include "validate/mcmc/path_space/path_projections.h"
+#include "validate/mcmc/path_space/proposal_projections.h"
 #include "validate/mcmc/registered_mutations.h"
 #include "validate/render/render_compare.h"
 
@@ -93,6 +100,48 @@ class CoupledSmallStep final : public pss::PssMutation {
  private:
   double sigma0_;
 };
+
+// A lens perturbation (r2 = 2 pixels) whose density is stated by one with r2 = 2.2 pixels: 10 %
+// too wide, the sampler unchanged.
+class MisstatedSmallLens final : public path_space::PathMutation {
+ public:
+  explicit MisstatedSmallLens(const PathContext& ctx) : sampler_(ctx, 0.1, 2.0), stated_(ctx, 0.1, 2.2) {}
+  std::string name() const override { return "test misstated lens"; }
+  double weight(const path_space::MltPath&) const override { return 0.1; }
+  std::optional<path_space::MltPath> propose(const path_space::MltPath& x, Uniforms& u) const override {
+    return sampler_.propose(x, u);
+  }
+  double density(const path_space::MltPath& x, const path_space::MltPath& y) const override {
+    return stated_.density(x, y);
+  }
+  const path_space::LensPerturbation& sampler() const { return sampler_; }
+
+ private:
+  path_space::LensPerturbation sampler_, stated_;
+};
+
+// The raster-offset projection (proposal_projections.h) of a test lens mutation, on Cornell-box
+// paths of 2 segments.
+path_space::PathProjectionInfo small_lens_projection(const std::string& name) {
+  using namespace path_space;
+  return {.name = name,
+          .coordinate = "raster offset (phi, ln r)",
+          .scenes = {"cornell-box.json"},
+          .paths = [](const PathContext& ctx, const PathMutation&,
+                      uint64_t seed) { return std::vector<MltPath>{path_with_segments(ctx, 2, 4, seed)}; },
+          .make = [](const PathProjectionInput& in, const MltPath& x) -> PathProjectionList {
+            const LensPerturbation* lens = nullptr;
+            if (const auto* m = dynamic_cast<const PathProposalMutation<LensPerturbation>*>(&in.registered))
+              lens = &m->proposal();
+            if (const auto* m = dynamic_cast<const MisstatedSmallLens*>(&in.registered)) lens = &m->sampler();
+            if (!lens) throw std::logic_error("not a test lens");
+            PathProjectionList out;
+            out.push_back(std::make_unique<const PathProjectionOf<LensOffsetProjection>>(
+                LensOffsetProjection{lens, &in.ctx, x, &in.checked}, "k=2"));
+            return out;
+          },
+          .quick_samples = 20000};
+}
 
 CheckContext quick() {
   CheckContext c;
@@ -199,6 +248,65 @@ TEST(MutationRegistry, NewPathMutationIsPickedUpByTheChecksAndTheDriver) {
       EXPECT_GT(m.proposed, 0);
     }
   EXPECT_TRUE(seen);
+}
+
+TEST(MutationRegistry, NewPathMutationIsPickedUpByTheProposalChiSquare) {
+  using namespace path_space;
+  CheckContext c = quick();
+  c.sample_scale = 0.5;
+  const auto small_lens = [](const std::string& name) {
+    return PathMutationInfo{name, "the lens perturbation with r2 = 2 pixels", 0.1,
+                            [](const PathContext& ctx, const PathMutationSettings&, double w)
+                                -> std::shared_ptr<const PathMutation> {
+                              return std::make_shared<const PathProposalMutation<LensPerturbation>>(
+                                  "test small lens", w, LensPerturbation(ctx, 0.1, 2.0));
+                            }};
+  };
+  register_path_mutation(small_lens("test small lens"));
+  register_path_projection(small_lens_projection("test small lens"));
+  const CheckResult r = path_registered_mutations_chi2(c, "test.path.registered.chi2");
+  unregister_path_projection("test small lens");
+  unregister_path_mutation("test small lens");
+  ASSERT_TRUE(r.details["mutations"].contains("test small lens")) << r.message;
+  const auto& toy = r.details["mutations"]["test small lens"];
+  EXPECT_EQ(toy["status"].get<std::string>(), "tested") << toy.dump(1);
+  EXPECT_EQ(toy["tests"].size(), 1u) << toy.dump(1);
+  EXPECT_TRUE(toy["passed"].get<bool>()) << toy.dump(1);
+  EXPECT_TRUE(r.passed) << r.message;
+
+  // A toy whose stated density is 10 % too wide in r2 (its sampler unchanged) must be rejected,
+  // and a mutation registered without a projection must fail the check, named in its message.
+  register_path_mutation({"test misstated lens", "a lens perturbation with a misstated density", 0.1,
+                          [](const PathContext& ctx, const PathMutationSettings&, double)
+                              -> std::shared_ptr<const PathMutation> {
+                            return std::make_shared<const MisstatedSmallLens>(ctx);
+                          }});
+  register_path_projection(small_lens_projection("test misstated lens"));
+  register_path_mutation(small_lens("test lens without projection"));
+  const CheckResult b = path_registered_mutations_chi2(c, "test.path.registered.chi2.broken");
+  unregister_path_projection("test misstated lens");
+  unregister_path_mutation("test misstated lens");
+  unregister_path_mutation("test lens without projection");
+  ASSERT_TRUE(b.details["mutations"].contains("test misstated lens")) << b.message;
+  EXPECT_TRUE(b.details["mutations"]["test misstated lens"]["rejected"].get<bool>()) << b.message;
+  EXPECT_FALSE(b.details["mutations"]["test misstated lens"]["passed"].get<bool>()) << b.message;
+  ASSERT_TRUE(b.details["mutations"].contains("test lens without projection")) << b.message;
+  EXPECT_EQ(b.details["mutations"]["test lens without projection"]["status"].get<std::string>(), "no projection");
+  EXPECT_FALSE(b.details["mutations"]["test lens without projection"]["passed"].get<bool>()) << b.message;
+  EXPECT_NE(b.message.find("test lens without projection: NO CHI-SQUARE PROJECTION DECLARED"), std::string::npos)
+      << b.message;
+  EXPECT_FALSE(b.passed) << b.message;
+  // The registered mutations themselves still pass in that run, and the declared exemptions are
+  // listed with their reasons.
+  for (const auto& m : path_mutations()) {
+    const auto& e = b.details["mutations"][m.name];
+    EXPECT_TRUE(e["passed"].get<bool>()) << m.name << ": " << b.message;
+    if (e["status"].get<std::string>() == "exempt") {
+      EXPECT_NE(e["note"].get<std::string>().find("not tested: "), std::string::npos) << m.name;
+    }
+  }
+  EXPECT_EQ(find_path_projection("test misstated lens"), nullptr);
+  EXPECT_EQ(find_path_mutation("test lens without projection"), nullptr);
 }
 
 }  // namespace

@@ -7,6 +7,10 @@
 //  - mlt.path_space.<mutation>.<projection>_chi2: proposal samples against the stated density in
 //    a low-dimensional projection (proposal_projections.h), alpha = 1e-5 per check, Šidák over
 //    its configurations;
+//  - mlt.path_space.registered_mutations.chi2: every registered mutation through the 2D projection
+//    declared for it (validate/mcmc/path_space/path_projections.h), Šidák over all tests at family
+//    alpha 1e-5; a mutation without a declared projection fails it; negative control
+//    negative_control.registered_mutations_misstated.chi2 (MisstatedPathDensity on every mutation);
 //  - mlt.path_space.mixture.pairwise: the same for the driver's mixture kernel (length-dependent
 //    selection probabilities in the ratio);
 //  - mlt.path_space.mixture.net_flux: zero net flux of the mixture kernel in path length, raster
@@ -824,6 +828,25 @@ const bool registered = [] {
         const bool rejected = r.statistic < r.alpha;
         r = negate(r);
         r.passed = rejected;
+        return r;
+      });
+  add(p + "registered_mutations.chi2",
+      "Every registered path mutation alone: proposal chi-square in the 2D projection declared for it "
+      "(path_projections.h) against the chart density stated from its density(); a mutation without a declared "
+      "projection fails",
+      CheckKind::kStatistical,
+      [](const CheckContext& cx, const std::string& n) { return path_registered_mutations_chi2(cx, n); });
+  add(p + "negative_control.registered_mutations_misstated.chi2",
+      "Negative control: the registered-mutations chi-square must reject every tested mutation with its stated "
+      "density tilted by 1 + 0.3 cos(move direction, fixed axis) (MisstatedPathDensity), its sampler unchanged",
+      CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) {
+        CheckResult r = path_registered_mutations_chi2(
+            cx, n, [](std::shared_ptr<const PathMutation> m, const PathContext&) -> std::shared_ptr<const PathMutation> {
+              return std::make_shared<const MisstatedPathDensity>(m);
+            });
+        r.passed = r.details.value("every_tested_rejected", false);
+        r.message = (r.passed ? "broken variant rejected for every tested mutation as required: "
+                              : "BROKEN VARIANT NOT DETECTED for some mutation: ") + r.message;
         return r;
       });
   add(p + "mixture.pairwise",

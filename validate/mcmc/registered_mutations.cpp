@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -21,6 +22,8 @@
 #include "validate/mcmc/pairwise_balance.h"
 #include "validate/mcmc/pairwise_record.h"
 #include "validate/mcmc/path_space/flux_bins.h"
+#include "validate/mcmc/path_space/path_projections.h"
+#include "validate/mcmc/path_space/scene_cache.h"
 #include "validate/chi2/sampler_chi2.h"
 #include "validate/mcmc/path_space/reference_density.h"
 #include "validate/render/render_compare.h"
@@ -475,6 +478,128 @@ CheckResult path_registered_mutations_flux_bins(const CheckContext& ctx, const s
   all.message = fmt::format("{} registered path mutations, Šidák p = {:.3g}{}: {}", count, all.statistic,
                             every_tested ? "" : " [a mutation had no bin pair tested]", msg);
   all.details["mutations"] = per;
+  return all;
+}
+
+CheckResult path_registered_mutations_chi2(const CheckContext& ctx, const std::string& name,
+                                           const PathMutationWrap& wrap) {
+  using namespace path_space;
+  constexpr double kFamilyAlpha = 1e-5;
+  constexpr int kRes = 16;
+  PathMutationSettings ms;
+  ms.max_segments = 5;  // the projections' test paths: max depth 4
+  struct Test {
+    std::string mutation, scene, label;
+    SamplerChi2Result r;
+  };
+  std::vector<Test> tests;
+  struct Entry {
+    std::string status, note;
+  };
+  std::vector<std::pair<std::string, Entry>> entries;
+  const auto& infos = path_mutations();
+  for (size_t i = 0; i < infos.size(); ++i) {
+    const std::string& mn = infos[i].name;
+    const PathProjectionInfo* proj = find_path_projection(mn);
+    if (!proj) {
+      entries.push_back({mn, {"no projection", "NO CHI-SQUARE PROJECTION DECLARED (register_path_projection, or a "
+                                               "no_projection_reason)"}});
+      continue;
+    }
+    if (!proj->no_projection_reason.empty()) {
+      entries.push_back({mn, {"exempt", "not tested: " + proj->no_projection_reason}});
+      continue;
+    }
+    size_t before = tests.size();
+    std::string error;
+    try {
+      for (const std::string& file : proj->scenes) {
+        const LoadedScene& sc = cached_scene(file, kRes);
+        const PathMutationList list = make_all_path_mutations(sc.ctx, ms);
+        const std::shared_ptr<const PathMutation> reg = list[i];
+        const std::shared_ptr<const PathMutation> checked = wrap ? wrap(reg, sc.ctx) : reg;
+        const uint64_t seed = hash_values(ctx.seed, hash_string(mn + "." + file));
+        const PathProjectionInput in{sc.ctx, *reg, *checked, seed};
+        int configs = 0;
+        for (const MltPath& x : proj->paths(sc.ctx, *reg, seed)) {
+          for (const auto& p : proj->make(in, x)) {
+            if (proj->configs_per_scene > 0 && configs >= proj->configs_per_scene) break;
+            SamplerChi2Options o;
+            o.samples = ctx.size(proj->quick_samples, proj->full_samples);
+            o.seed = ctx.seed;
+            o.key = hash_values(hash_string(name + "." + mn + "." + file), static_cast<uint64_t>(configs));
+            o.quadrature_max_depth = proj->quadrature_max_depth;
+            tests.push_back({mn, file, p->label(),
+                             chi2_test(Chi2Domain::rectangle(p->chart_lo(), p->chart_hi(), proj->cells_x, proj->cells_y),
+                                       [&p](Uniforms& u) { return p->sample(u); },
+                                       [&p](const Vec2& q) { return p->pdf(q); }, o)});
+            ++configs;
+          }
+          if (proj->configs_per_scene > 0 && configs >= proj->configs_per_scene) break;
+        }
+      }
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    if (!error.empty())
+      entries.push_back({mn, {"error", "ERROR: " + error}});
+    else if (tests.size() == before)
+      entries.push_back({mn, {"nothing tested", "NOTHING TESTED: no configuration on its scenes"}});
+    else
+      entries.push_back({mn, {"tested", proj->coordinate}});
+  }
+  const int64_t m = std::max<int64_t>(1, static_cast<int64_t>(tests.size()));
+  const double a = stats::sidak_alpha(kFamilyAlpha, m);
+  CheckResult all;
+  all.statistic_name = "Šidák-adjusted min p over (mutation, configuration)";
+  all.alpha = kFamilyAlpha;
+  bool ok = true, every_rejected = true, any_tested = false;
+  double p_min = 1.0;
+  std::string msg;
+  nlohmann::json per = nlohmann::json::object();
+  for (const auto& [mn, e] : entries) {
+    nlohmann::json rows = nlohmann::json::array();
+    double mp = 1.0;
+    bool rejected = false;
+    for (const Test& t : tests) {
+      if (t.mutation != mn) continue;
+      const bool rej = !t.r.passed(a);
+      rejected = rejected || rej;
+      mp = std::min(mp, t.r.p_value());
+      all.samples += t.r.samples;
+      nlohmann::json row = t.r.details();
+      row["scene"] = t.scene;
+      row["configuration"] = t.label;
+      row["p"] = t.r.p_value();
+      row["rejected"] = rej;
+      row["message"] = t.r.message();
+      rows.push_back(row);
+    }
+    const bool tested = e.status == "tested";
+    const bool passed = e.status == "exempt" || (tested && !rejected);
+    ok = ok && passed;
+    if (tested) {
+      any_tested = true;
+      every_rejected = every_rejected && rejected;
+      p_min = std::min(p_min, mp);
+    }
+    per[mn] = {{"status", e.status}, {"passed", passed}, {"rejected", rejected}, {"min_p", mp},
+               {"note", e.note}, {"tests", rows}};
+    msg += fmt::format("{}{}: {}", msg.empty() ? "" : "; ", mn,
+                       tested ? fmt::format("{} tests, min p = {:.3g}{}", rows.size(), mp, rejected ? " REJECTED" : "")
+                              : e.note);
+  }
+  all.statistic = stats::sidak_adjust(p_min, m);
+  all.p_value = all.statistic;
+  all.passed = ok && any_tested;
+  all.message = fmt::format("{} registered path mutations, {} tests: Šidák p = {:.3g} (family alpha {:g}, per test "
+                            "{:.3g}): {}",
+                            infos.size(), tests.size(), all.statistic, kFamilyAlpha, a, msg);
+  all.details["mutations"] = per;
+  all.details["alpha_family"] = kFamilyAlpha;
+  all.details["alpha_per_test"] = a;
+  all.details["tests"] = static_cast<int64_t>(tests.size());
+  all.details["every_tested_rejected"] = any_tested && every_rejected;
   return all;
 }
 

@@ -6,7 +6,9 @@
 // mutation registered later, by a researcher or a test, is picked up by the registered checks
 // mcmc.pss.cornell.registered_mutations.pairwise, mcmc.pss.cornell.registered_mutations.chi2 (the
 // proposal chi-square of each mutation against its stated density), mlt.path_space.
-// registered_mutations.pairwise and mlt.path_space.registered_mutations.flux_bins, which call
+// registered_mutations.pairwise, mlt.path_space.registered_mutations.flux_bins and
+// mlt.path_space.registered_mutations.chi2 (through the projection each path-space mutation
+// declares, validate/mcmc/path_space/path_projections.h), which call
 // these functions.
 #pragma once
 
@@ -73,5 +75,21 @@ CheckResult path_registered_mutations_pairwise(const CheckContext& ctx, const st
 // negative control is caught only by a rejection (statistic < alpha), not by a pair left untested.
 CheckResult path_registered_mutations_flux_bins(const CheckContext& ctx, const std::string& name,
                                                 const PathMutationWrap& wrap = {});
+
+// Path space, proposal chi-square (docs/validation.md A, "mutation proposals"; docs/mlt-path-space.md):
+// every registered mutation (path_mutations()) through the 2D projection declared for it by name
+// (validate/mcmc/path_space/path_projections.h): on each scene of its declaration (16 x 16), test
+// paths from seeded BDPT samples (max depth 4), at each the declared configurations; y proposed by
+// the mutation (or its wrapper) mapped to the chart, against the chart density stated from its
+// density(x, y) (validate/chi2: expected counts by adaptive quadrature, failed proposals and the
+// stated mass off the chart in one cell). Šidák over every (mutation, configuration) test at family
+// alpha 1e-5; fixed seeds from ctx.seed, the name, the mutation and the scene. A registered mutation
+// with no declared projection FAILS the check (named in the message); one declared without a
+// projection (no_projection_reason) is listed with its reason and not tested; one whose
+// declaration yields no configuration on any of its scenes fails (nothing tested). Details per
+// mutation under "mutations" ("status": tested, exempt, no projection, nothing tested, error;
+// "rejected": some test of it rejected), "every_tested_rejected" for controls.
+CheckResult path_registered_mutations_chi2(const CheckContext& ctx, const std::string& name,
+                                           const PathMutationWrap& wrap = {});
 
 }  // namespace tb

@@ -1,6 +1,8 @@
 #include "validate/mcmc/path_space/proposal_projections.h"
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "lib/core/frame.h"
 #include "lib/geometry/spawn.h"
@@ -28,11 +30,13 @@ std::optional<Vec3> BidirWayProjection::sample(Uniforms& u) const {
   return glm::normalize(y->v[x.segments() - 2].hit.p - sampling_vertex(x, s).hit.p);
 }
 
-double BidirWayProjection::pdf(const Vec3& w) const {
-  const PathContext& ctx = mut->context();
-  const PathVertex& from = sampling_vertex(x, s);
+namespace {
+// x with x_{k-2} replaced by the first hit along w from `from`, and the area factor |cos| / d^2
+// there (0 when nothing is hit).
+std::pair<MltPath, double> with_new_vertex(const PathContext& ctx, const MltPath& x, const PathVertex& from,
+                                           const Vec3& w) {
   const auto hit = ctx.world->geometry().intersect(spawn_ray(from.hit, w));
-  if (!hit) return 0.0;
+  if (!hit) return {x, 0.0};
   MltPath y = x;
   PathVertex& v = y.v[x.segments() - 2];
   v = PathVertex{};
@@ -41,12 +45,45 @@ double BidirWayProjection::pdf(const Vec3& w) const {
   v.bsdf = ctx.world->surface(hit->shape_id).bsdf;
   v.light = ctx.world->surface(hit->shape_id).emitter;
   const double area = solid_angle_to_area(1.0, from.hit.p, v.hit.p, v.hit.ng);
+  return {std::move(y), area};
+}
+
+// Is p the first hit from `from` towards it (to 1e-4 of the distance: the two points come from
+// different rays)?
+bool seen_from(const PathContext& ctx, const PathVertex& from, const Vec3& p) {
+  const double dist = glm::length(p - from.hit.p);
+  if (!(dist > 0.0)) return false;
+  const auto hit = ctx.world->geometry().intersect(spawn_ray(from.hit, (p - from.hit.p) / dist));
+  return hit && glm::length(hit->p - p) <= 1e-4 * std::max(1.0, dist);
+}
+}  // namespace
+
+double BidirWayProjection::pdf(const Vec3& w) const {
+  const auto [y, area] = with_new_vertex(mut->context(), x, sampling_vertex(x, s), w);
+  if (!(area > 0.0)) return 0.0;
   const double p = split_density ? split_density(y, way_of(x).l, 1, s) : mut->split_density(y, way_of(x).l, 1, s);
-  return area > 0.0 ? p / area : 0.0;
+  return p / area;
+}
+
+std::optional<Vec3> BidirVertexProjection::sample(Uniforms& u) const {
+  const auto y = mutation->propose(x, u);
+  if (!y) return std::nullopt;
+  const auto w = structure->way_between(x, *y);
+  const BidirectionalMutation::Way one = way_of(x);
+  if (!w || w->l != one.l || w->m != one.m || w->ka != one.ka) return std::nullopt;
+  const Vec3 p = y->v[x.segments() - 2].hit.p;
+  if (!seen_from(*ctx, sampling_vertex(x, 1), p) || !(PathTarget{ctx}.density(*y) > 0.0)) return std::nullopt;
+  return glm::normalize(p - sampling_vertex(x, 1).hit.p);
+}
+
+double BidirVertexProjection::pdf(const Vec3& w) const {
+  const auto [y, area] = with_new_vertex(*ctx, x, sampling_vertex(x, 1), w);
+  if (!(area > 0.0) || !(PathTarget{ctx}.density(y) > 0.0)) return 0.0;
+  return mutation->density(x, y) / area;
 }
 
 std::optional<Vec2> LensOffsetProjection::sample(Uniforms& u) const {
-  const auto y = lens->propose(x, u);
+  const auto y = mutation ? mutation->propose(x, u) : lens->propose(x, u);
   if (!y) return std::nullopt;
   const auto rx = path_raster(*ctx, x), ry = path_raster(*ctx, *y);
   if (!rx || !ry) return std::nullopt;
@@ -62,14 +99,14 @@ double LensOffsetProjection::pdf(const Vec2& q) const {
   const auto y = lens->perturb(x, d);
   if (!y) return 0.0;
   const double jac = lens->raster_jacobian(*y);
-  return jac > 0.0 ? lens->density(x, *y) / jac * r * r : 0.0;
+  return jac > 0.0 ? (mutation ? mutation->density(x, *y) : lens->density(x, *y)) / jac * r * r : 0.0;
 }
 
 Vec2 LensOffsetProjection::chart_lo() const { return {0.0, std::log(lens->r1()) - 0.2}; }
 Vec2 LensOffsetProjection::chart_hi() const { return {2 * kPi, std::log(lens->r2()) + 0.2}; }
 
 std::optional<Vec2> CausticAngleProjection::sample(Uniforms& u) const {
-  const auto y = caustic->propose(x, u);
+  const auto y = mutation ? mutation->propose(x, u) : caustic->propose(x, u);
   if (!y) return std::nullopt;
   const int i = caustic->perturbed_index(x);
   const Vec3 o = caustic->apex(x);
@@ -85,7 +122,7 @@ double CausticAngleProjection::pdf(const Vec2& q) const {
   const auto y = caustic->perturb(x, theta, q.x);
   if (!y) return 0.0;
   const double g = caustic->area_factor(*y);
-  return g > 0.0 ? caustic->density(x, *y) / g * std::sin(theta) * theta : 0.0;
+  return g > 0.0 ? (mutation ? mutation->density(x, *y) : caustic->density(x, *y)) / g * std::sin(theta) * theta : 0.0;
 }
 
 Vec2 CausticAngleProjection::chart_lo() const { return {0.0, std::log(caustic->theta1()) - 0.2}; }
@@ -116,7 +153,7 @@ std::pair<Vec3, Vec3> apex_and_direction(const MltPath& z, int i) {
 
 std::optional<Vec2> MultiChainAngleProjection::sample(Uniforms& u) const {
   OffsetFixedUniforms fu(u_offset, u);
-  const auto y = sampler->propose(x, fu);
+  const auto y = mutation ? mutation->propose(x, fu) : sampler->propose(x, fu);
   if (!y) return std::nullopt;
   const int j1 = sampler->levels(x).front();
   const Vec3 wx = apex_and_direction(x, j1).second, wy = apex_and_direction(*y, j1).second;
@@ -145,11 +182,36 @@ double MultiChainAngleProjection::pdf(const Vec2& q) const {
   const auto y = sampler->perturb(x, sampler->lens().sample_offset(u_offset), {Vec2(theta, q.x)});
   if (!y) return 0.0;
   const double g = jacobian(*y, theta);
-  return g > 0.0 ? stated->density(x, *y) / g : 0.0;
+  return g > 0.0 ? (mutation ? mutation->density(x, *y) : stated->density(x, *y)) / g : 0.0;
 }
 
 Vec2 MultiChainAngleProjection::chart_lo() const { return {0.0, std::log(1e-4) - 0.2}; }
 Vec2 MultiChainAngleProjection::chart_hi() const { return {2 * kPi, std::log(0.1) + 0.2}; }
+
+std::optional<Vec2> RamltLensAngleProjection::sample(Uniforms& u) const {
+  const auto y = mutation ? mutation->propose(x, u) : lens->propose(x, u);
+  if (!y) return std::nullopt;
+  const Vec3 wx = RamltLensPerturbation::primary_direction(x), wy = RamltLensPerturbation::primary_direction(*y);
+  const Vec3 local = Frame::from_z(wx).to_local(wy);
+  double phi = std::atan2(local.y, local.x);
+  if (phi < 0) phi += 2 * kPi;
+  return Vec2(phi, std::atan2(glm::length(glm::cross(wx, wy)), glm::dot(wx, wy)));
+}
+
+double RamltLensAngleProjection::pdf(const Vec2& q) const {
+  const double theta = q.y;
+  const Vec3 wx = RamltLensPerturbation::primary_direction(x);
+  const Vec3 w = Frame::from_z(wx).to_world(
+      Vec3(std::sin(theta) * std::cos(q.x), std::sin(theta) * std::sin(q.x), std::cos(theta)));
+  const auto y = lens->perturb(x, w);
+  if (!y) return 0.0;
+  const int k = y->segments();
+  const double g = solid_angle_to_area(1.0, y->v[k].hit.p, y->v[k - 1].hit.p, y->v[k - 1].geometric_normal());
+  return g > 0.0 ? (mutation ? mutation->density(x, *y) : lens->density(x, *y)) / g * std::sin(theta) : 0.0;
+}
+
+Vec2 RamltLensAngleProjection::chart_lo() const { return {0.0, 0.0}; }
+Vec2 RamltLensAngleProjection::chart_hi() const { return {2 * kPi, 0.4}; }
 
 MltPath path_with_segments(const PathContext& ctx, int k, int max_depth, uint64_t seed) {
   for (uint64_t i = 0;; ++i) {

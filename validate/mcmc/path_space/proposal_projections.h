@@ -14,6 +14,20 @@
 //    (phi, rho = ln theta) in the frame about the old direction; stated density T(x -> y) divided
 //    by |cos| / d^2 at y_{k-1} (area to solid angle) times sin(theta) theta (solid angle to
 //    (phi, rho)). Chart rho range 0.2 beyond [ln theta1, ln theta2].
+//  - BidirVertexProjection: the whole bidirectional mutation seen through its one-vertex way
+//    (below).
+//  - MultiChainAngleProjection: the direction change at the first continued level given a fixed
+//    raster offset (see jacobian()).
+//  - RamltLensAngleProjection: the primary ray direction change of the regional adaptive lens
+//    perturbation as (phi, theta) about the old direction; stated density T(x -> y) divided by
+//    |cos| / d^2 at y_{k-1} (solid angle to area; paths with an empty lens chain, so no specular
+//    factor enters) times sin(theta). Chart theta in [0, 0.4] (the registry's sigma = 0.05 rad
+//    leaves mass exp(-32) beyond; in theta, not ln theta, as the signed-normal kernel of
+//    ramlt_direction.h has a density of |theta| that is flat at 0).
+// The lens, caustic, multi-chain and ramlt-lens projections take an optional PathMutation
+// (`mutation`): when set, proposals are its propose() and the stated density its density() (the
+// registered mutation or a wrapper of it, validate/mcmc/path_space/path_projections.h), and the
+// concrete perturbation supplies only the chart (perturb, Jacobians).
 #pragma once
 
 #include <cstdint>
@@ -24,6 +38,8 @@
 #include "lib/mcmc/path_space/caustic_perturbation.h"
 #include "lib/mcmc/path_space/lens_perturbation.h"
 #include "lib/mcmc/path_space/multi_chain_perturbation.h"
+#include "lib/mcmc/path_space/path_mutations.h"
+#include "lib/mcmc/path_space/ramlt_perturbations.h"
 
 namespace tb::path_space {
 
@@ -38,10 +54,29 @@ struct BidirWayProjection {
   double pdf(const Vec3& w) const;
 };
 
+// The whole bidirectional mutation (propose, density) seen through its one-vertex way at k >= 3
+// segments: y kept when way_between(x, y) deletes x_{k-2} alone and adds one vertex (either
+// split), every other proposal a failed sample; projection: the unit direction from x_{k-3} to
+// y_{k-2}, kept only where y_{k-2} is the first hit from x_{k-3} and f(y) > 0 (elsewhere
+// balance does not constrain T, and density() counts e.g. the split that would have reached
+// y_{k-2} through an occluder, which the sampler cannot); stated density: density(x, y) (deletion
+// and addition probabilities, both splits) times d^2 / |cos theta| at the first hit from x_{k-3},
+// where f(y) > 0. It integrates to the probability of that way with f(y) > 0, which the failure
+// cell sees.
+struct BidirVertexProjection {
+  const PathMutation* mutation = nullptr;
+  const PathContext* ctx = nullptr;
+  const BidirectionalMutation* structure = nullptr;  // way_between
+  MltPath x;
+  std::optional<Vec3> sample(Uniforms& u) const;
+  double pdf(const Vec3& w) const;
+};
+
 struct LensOffsetProjection {
   const LensPerturbation* lens = nullptr;
   const PathContext* ctx = nullptr;
   MltPath x;
+  const PathMutation* mutation = nullptr;  // set: its propose() and density() (see above)
   std::optional<Vec2> sample(Uniforms& u) const;
   double pdf(const Vec2& phi_rho) const;
   Vec2 chart_lo() const;
@@ -51,6 +86,7 @@ struct LensOffsetProjection {
 struct CausticAngleProjection {
   const CausticPerturbation* caustic = nullptr;
   MltPath x;
+  const PathMutation* mutation = nullptr;
   std::optional<Vec2> sample(Uniforms& u) const;
   double pdf(const Vec2& phi_rho) const;
   Vec2 chart_lo() const;
@@ -63,12 +99,23 @@ struct MultiChainAngleProjection {
   const PathContext* ctx = nullptr;
   MltPath x;    // levels(x).size() == 2
   Vec2 u_offset{0.3, 0.5};  // the fixed uniforms of the raster offset
+  const PathMutation* mutation = nullptr;  // set: replaces both sampler->propose and stated->density
   std::optional<Vec2> sample(Uniforms& u) const;
   double pdf(const Vec2& phi_rho) const;
   Vec2 chart_lo() const;
   Vec2 chart_hi() const;
   // Jacobian from (phi, theta) at the level (given d0) to the path measure, times K_r(d0); see above.
   double jacobian(const MltPath& y, double theta) const;
+};
+
+struct RamltLensAngleProjection {
+  const RamltLensPerturbation* lens = nullptr;
+  MltPath x;  // applicable, with an empty lens chain (x_{k-1} not specular)
+  const PathMutation* mutation = nullptr;
+  std::optional<Vec2> sample(Uniforms& u) const;
+  double pdf(const Vec2& phi_rho) const;
+  Vec2 chart_lo() const;
+  Vec2 chart_hi() const;
 };
 
 // A BDPT-sampled path with exactly k segments (deterministic in seed).
