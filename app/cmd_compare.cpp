@@ -1,5 +1,6 @@
 #include "app/cmd_compare.h"
 
+#include <cmath>
 #include <cctype>
 #include <filesystem>
 
@@ -145,6 +146,11 @@ int compare_images(const CompareArgs& a) {
                r.worst.y, r.worst.channel >= 0 && r.worst.channel < 3 ? kChannel[r.worst.channel] : "?", r.worst.mean_a,
                r.worst.mean_b, r.worst.t, r.worst.dof, r.worst.p);
   fmt::print("  mean relative difference (A - B) / B: {:+.4g}\n", r.mean_relative_difference);
+  fmt::print("  power: {} (Stouffer over the channels; R {}, G {}, B {} alone; docs/statistics.md)\n",
+             mde_phrase(r.min_detectable_relative_bias),
+             std::isfinite(r.min_detectable_bias_channel[0]) ? fmt::format("{:.3g}%", 100.0 * r.min_detectable_bias_channel[0]) : "-",
+             std::isfinite(r.min_detectable_bias_channel[1]) ? fmt::format("{:.3g}%", 100.0 * r.min_detectable_bias_channel[1]) : "-",
+             std::isfinite(r.min_detectable_bias_channel[2]) ? fmt::format("{:.3g}%", 100.0 * r.min_detectable_bias_channel[2]) : "-");
   {  // error of A with B as the reference (docs/compare.md, rRMSE; relMSE with eps = 0.01)
     std::vector<Rgb> ma(img_a.pixels()), mb(img_b.pixels()), vb(img_b.pixels());
     for (size_t i = 0; i < ma.size() && i < mb.size(); ++i) {
