@@ -97,16 +97,20 @@ struct ImageCompareResult {
   // estimated without bias by 1 / (se_i b(dof_i)), b = stats::inverse_sd_bias. So channel c's Z
   // has mean d g_c with
   //     g_c = sum_i kappa_i m_i / (se_i b_i) / sqrt(P_c)      (stouffer_gain),
-  // and is held to alpha_stouffer = Šidák(alpha_each, 3). The channels' Z are treated as
-  // independent (their pixels' noise is correlated in a render: then the true power is lower
-  // than stated by at most the difference to the best single channel, min_detectable_bias_channel).
-  // d solves 1 - prod_c (1 - z_test_power(d g_c, alpha_stouffer)) = 0.9 (uniform_bias_mde). Valid
-  // for a bias small against each unit's mean (the shift of z is linear there) and, with the skew
-  // correction, up to the correction's own change of slope. Infinite where no unit has signal.
+  // and is held to alpha_stouffer = Šidák(alpha_each, 3). Channel c alone detects
+  // d_c = minimal_detectable_shift(alpha_stouffer, 0.9) / g_c (min_detectable_bias_channel). A
+  // rejection in any channel rejects, so min_c d_c holds whatever the dependence between the
+  // channels (in a render they come from the same paths, often almost perfectly correlated):
+  // that is min_detectable_relative_bias. For independent channels the bias is smaller:
+  // min_detectable_relative_bias_independent solves 1 - prod_c (1 - z_test_power(d g_c,
+  // alpha_stouffer)) = 0.9 (uniform_bias_mde). Valid for a bias small against each unit's mean
+  // (the shift of z is linear there) and, with the skew correction, up to the correction's own
+  // change of slope. Infinite where no unit has signal.
   double stouffer_gain[3] = {0.0, 0.0, 0.0};
   double alpha_stouffer = 0.0;
   double min_detectable_bias_channel[3] = {kMdeNone, kMdeNone, kMdeNone};
   double min_detectable_relative_bias = kMdeNone;
+  double min_detectable_relative_bias_independent = kMdeNone;
   // Tiled test (ImageCompareOptions::test == kTiled). For kPixel, tile = 1 and the shifts are
   // still predicted when both images have third moments.
   bool tiled = false;

@@ -216,10 +216,10 @@ std::string ChannelCompare::message() const {
 }
 
 double ChannelCompare::min_detectable_relative_bias() const {
-  // Each channel's comparison holds one channel (the others are skipped there).
-  std::vector<std::pair<double, double>> gains;
-  for (int c = 0; c < 3; ++c) gains.emplace_back(channel[c].stouffer_gain[c], channel[c].alpha_stouffer);
-  return uniform_bias_mde(gains);
+  // Each channel's comparison holds one channel (the others are skipped there); the best
+  // channel's, valid whatever the dependence between channels (ImageCompareResult).
+  return std::min({channel[0].min_detectable_bias_channel[0], channel[1].min_detectable_bias_channel[1],
+                   channel[2].min_detectable_bias_channel[2]});
 }
 
 nlohmann::json ChannelCompare::details() const {

@@ -108,8 +108,9 @@ struct ChannelCompare {
   double p_value() const;  // Šidák over the 3 channels of the smallest channel p-value
   double mean_relative_difference() const;  // over all channels
   int worst_channel() const;
-  // The smallest uniform relative bias the comparison detects with 90% power, from the three
-  // channels' Stouffer tests (ImageCompareResult::min_detectable_relative_bias, uniform_bias_mde).
+  // The smallest uniform relative bias the comparison detects with 90% power: the best channel's
+  // Stouffer test alone (ImageCompareResult::min_detectable_relative_bias), whatever the
+  // dependence between channels.
   double min_detectable_relative_bias() const;
   std::string message() const;
   nlohmann::json details() const;
