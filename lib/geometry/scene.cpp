@@ -240,6 +240,21 @@ std::optional<Hit> Scene::intersect(const Ray& ray, double tmax) const {
   return h;
 }
 
+bool Scene::intersect(const Ray& ray, Hit* out, double tmax) const {
+  if (!committed_) throw std::logic_error("Scene::intersect before commit");
+  QueryContext ctx;
+  RTCRayHit rh;
+  const Entry* e = trace_nearest(scene_, entries_, ray, tmax, &ctx, &rh);
+  if (!e) return false;
+  if (const auto* m = std::get_if<TriangleMesh>(&e->shape)) {
+    m->refine_hit(rh.hit.primID, ray, rh.ray.tfar, Vec2(rh.hit.u, rh.hit.v), out);
+    out->shape_id = e->id;
+  } else {
+    *out = *ctx.analytic_hit;
+  }
+  return true;
+}
+
 bool Scene::intersect_point(const Ray& ray, SurfacePoint* out, double tmax) const {
   if (!committed_) throw std::logic_error("Scene::intersect before commit");
   QueryContext ctx;

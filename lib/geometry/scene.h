@@ -35,6 +35,10 @@ class Scene {
   // Nearest hit with ray.t_min < t < min(ray.t_max, tmax) (rtcIntersect1). Thread-safe after
   // commit().
   std::optional<Hit> intersect(const Ray& ray, double tmax = kInfinity) const;
+  // The same Hit written into *out (every field; *out is untouched when there is no hit):
+  // returns whether there is one. For callers that keep the record in a larger one (BDPT's
+  // PathVertex): no optional is built per query and no 224-byte Hit copied out of it.
+  bool intersect(const Ray& ray, Hit* out, double tmax = kInfinity) const;
   // The same query without differential geometry, for the path tracer: the SurfacePoint part of
   // the Hit intersect() would return, except that a triangle hit keeps Embree's float
   // barycentrics (clamped into the triangle) instead of re-intersecting the double ray: the point

@@ -98,21 +98,25 @@ void TriangleMesh::surface_at(uint32_t prim, const Vec2& uv, Hit* out) const {
   }
 }
 
-Vec2 TriangleMesh::refine_uv(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float, double* t_out) const {
-  const glm::uvec3 tri = tris_[prim];
-  const Vec3 &p0 = pos_[tri[0]], &p1 = pos_[tri[1]], &p2 = pos_[tri[2]];
+namespace {
+
+// The arithmetic of TriangleMesh::refine_uv, cloned for CPUs with FMA: without -mfma each
+// std::fma of difference_of_products is a call into libm, and every call spills the live xmm
+// registers (all caller-saved). fma is correctly rounded either way, and contraction of
+// a * b + c into fma is switched off for this function (GCC contracts by default once FMA is
+// available), so both clones give the same bits as the out-of-line calls did.
+[[gnu::target_clones("fma", "default"), gnu::optimize("fp-contract=off")]] Vec2 refine_uv_impl(const Vec3& p0, const Vec3& p1, const Vec3& p2,
+                                                             const Vec3& nrm, double d00, double d01, double d11,
+                                                             double denom, const Ray& ray, double t_float,
+                                                             const Vec2& uv_float, double* t_out) {
   const Vec3 e1 = p1 - p0, e2 = p2 - p0;
-  const TriangleFrame& f = frames_[prim];
-  const Vec3& nrm = f.plane;
   const double den = glm::dot(nrm, ray.d);
   double t = t_float;
   Vec2 uv = uv_float;
   if (den != 0) {
     t = glm::dot(nrm, p0 - ray.o) / den;
     const Vec3 w = ray.at(t) - p0;
-    const double d00 = f.d00, d01 = f.d01, d11 = f.d11;
     const double d20 = glm::dot(w, e1), d21 = glm::dot(w, e2);
-    const double denom = f.denom;
     if (denom > 0) {
       double b1 = difference_of_products(d11, d20, d01, d21) / denom;
       double b2 = difference_of_products(d00, d21, d01, d20) / denom;
@@ -128,6 +132,15 @@ Vec2 TriangleMesh::refine_uv(uint32_t prim, const Ray& ray, double t_float, cons
   }
   *t_out = t;
   return uv;
+}
+
+}  // namespace
+
+Vec2 TriangleMesh::refine_uv(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float, double* t_out) const {
+  const glm::uvec3 tri = tris_[prim];
+  const TriangleFrame& f = frames_[prim];
+  return refine_uv_impl(pos_[tri[0]], pos_[tri[1]], pos_[tri[2]], f.plane, f.d00, f.d01, f.d11, f.denom, ray, t_float,
+                        uv_float, t_out);
 }
 
 void TriangleMesh::refine_hit(uint32_t prim, const Ray& ray, double t_float, const Vec2& uv_float, Hit* h) const {

@@ -40,10 +40,9 @@ inline void random_walk(const PathContext& ctx, Uniforms& rng, Ray ray, Rgb beta
     if (before2) (*path)[m - 2].pdf_rev = pdf_next(ctx, &v, (*path)[m - 1], *before2, opposite(mode));
   };
   while (path->size() < max_vertices) {
-    const auto hit = world.geometry().intersect(ray);
-    if (!hit) {
+    PathVertex v;  // the hit is written into v.hit in place (Scene::intersect(ray, Hit*))
+    if (!world.geometry().intersect(ray, &v.hit)) {
       if (mode == TransportMode::kRadiance && !world.infinite_lights().empty()) {
-        PathVertex v;
         v.kind = VertexKind::kLight;
         v.infinite = true;
         v.w_inf = glm::normalize(ray.d);
@@ -55,10 +54,8 @@ inline void random_walk(const PathContext& ctx, Uniforms& rng, Ray ray, Rgb beta
       }
       return;
     }
-    PathVertex v;
     v.kind = VertexKind::kSurface;
-    v.hit = *hit;
-    const SurfaceInfo& si = world.surface(hit->shape_id);
+    const SurfaceInfo& si = world.surface(v.hit.shape_id);
     v.bsdf = si.bsdf;
     v.light = si.emitter;
     v.beta = beta;
