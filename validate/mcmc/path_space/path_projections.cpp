@@ -123,7 +123,8 @@ std::vector<PathProjectionInfo>& table() {
        .cells_y = 7,
        // About 5 % of the whole mutation's proposals take the one-vertex way with f(y) > 0.
        .quick_samples = 300000,
-       .full_samples = 3000000},
+       .full_samples = 3000000,
+       .monte_carlo_expected = true},
       {.name = "lens",
        .coordinate = "raster offset (phi, ln r)",
        .scenes = {"cornell-box.json"},

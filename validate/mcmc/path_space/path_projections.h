@@ -72,6 +72,9 @@ struct PathProjectionInfo {
   // Bisections per level of the expected counts' quadrature (sampler_chi2.h): 3 keeps cells cut
   // by the image border cheap; more where the stated density has an integrable peak.
   int quadrature_max_depth = 3;
+  // Expected counts by a Monte Carlo integral of the stated density (sampler_chi2.h,
+  // monte_carlo_expected) instead: where the density lives on slivers quadrature misses.
+  bool monte_carlo_expected = false;
   int configs_per_scene = 0;  // at most this many configurations per scene (0: every one)
   // Non-empty: the mutation is declared to have no projection, for this reason (printed).
   std::string no_projection_reason = {};
