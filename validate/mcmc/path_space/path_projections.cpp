@@ -9,6 +9,7 @@
 #include "lib/core/frame.h"
 #include "lib/core/hash.h"
 #include "lib/geometry/spawn.h"
+#include "lib/path/path.h"
 #include "lib/mcmc/path_space/start_paths.h"
 #include "validate/mcmc/path_space/proposal_projections.h"
 
@@ -207,10 +208,37 @@ std::vector<PathProjectionInfo>& table() {
            "first continued level) needs the truncated-normal primary kernel in place of the lens kernel K_r; its "
            "direction kernel is checked by mcmc.ramlt.direction.chi2"},
       {.name = "hslt",
-       .no_projection_reason =
-           "not built for the registered instance: the half-vector mutation moves every vertex by a walk in "
-           "half-vector space; its chi-squares (mcmc.hslt.proposal_chi2.glossy, .dg_mirror) use a configured "
-           "instance (gamma 1, 0.5 % image change) on paths of one shape with a chart from the constraint blocks"},
+       .coordinate = "y_1 on the tangent plane of x_1 in the chart of the step's first-order spread, k = 2",
+       .scenes = {"glossy.json"},
+       // Paths light -> x_1 -> camera with x_1 on the rough gold sphere (Beckmann roughness >= 0.15),
+       // away from its silhouette (|cos| to the camera >= 0.5) so that the chart is regular over the
+       // support: the first of seeded BDPT samples (mcmc.hslt.proposal_chi2.glossy's paths).
+       .paths =
+           [](const PathContext& ctx, const PathMutation& reg, uint64_t seed) {
+             const auto& h = concrete<HsltMutation>(reg);
+             std::vector<MltPath> out;
+             for (uint64_t i = 0; i < 200000 && out.empty(); ++i) {
+               Rng r = Rng::for_sample(seed + 50, 0x68736c74ULL, i);
+               RngUniforms u(r);
+               auto p = sample_bdpt_path(ctx, u, 1, 2);
+               if (!p || p->segments() != 2 || !h.applicable(*p) || !(reg.weight(*p) > 0.0)) continue;
+               const PathVertex& v = p->v[1];
+               if (v.bsdf->name() != "rough_conductor" || v.bsdf->beckmann_roughness() < 0.15) continue;
+               if (std::abs(glm::dot(v.hit.ng, direction(v, p->v[2]))) < 0.5) continue;
+               out.push_back(std::move(*p));
+             }
+             return out;
+           },
+       .make = [](const PathProjectionInput& in, const MltPath& x) -> PathProjectionList {
+         const auto p = HsltTangentProjection::at(&concrete<HsltMutation>(in.registered), &in.ctx, x, &in.checked);
+         if (!p) return {};
+         return one(*p, fmt::format("k=2 x_1 on {}", x.v[1].bsdf->name()));
+       },
+       .cells_x = 15,
+       .cells_y = 15,
+       .quick_samples = 20000,
+       .full_samples = 200000,
+       .quadrature_max_depth = 2},
   };
   return t;
 }

@@ -5,6 +5,8 @@
 #include <utility>
 
 #include "lib/core/frame.h"
+#include "lib/differential/hslt_constraints.h"
+#include "lib/mcmc/path_space/path_state.h"
 #include "lib/geometry/spawn.h"
 #include "lib/mcmc/path_space/start_paths.h"
 #include "lib/path/dirac.h"
@@ -212,6 +214,63 @@ double RamltLensAngleProjection::pdf(const Vec2& q) const {
 
 Vec2 RamltLensAngleProjection::chart_lo() const { return {0.0, 0.0}; }
 Vec2 RamltLensAngleProjection::chart_hi() const { return {2 * kPi, 0.4}; }
+
+std::optional<HsltTangentProjection> HsltTangentProjection::at(const HsltMutation* hslt, const PathContext* ctx,
+                                                               const MltPath& x, const PathMutation* mutation) {
+  const auto X = hslt->hslt_path(x);
+  if (!X || X->vertices.size() != 3) return std::nullopt;
+  HsltTangentProjection p;
+  p.hslt = hslt;
+  p.ctx = ctx;
+  p.x = x;
+  p.mutation = mutation;
+  const HsltVertex& v1 = X->vertices[1];
+  const HsltFrame fr = hslt_frame(v1);
+  p.o = v1.p;
+  p.n = v1.n;
+  p.s = fr.s;
+  p.t = fr.t;
+  const HsltBlocks b = hslt_constraint_blocks(*X);
+  Eigen::Matrix2d P;
+  P << glm::dot(fr.s, v1.dpdu), glm::dot(fr.s, v1.dpdv), glm::dot(fr.t, v1.dpdu), glm::dot(fr.t, v1.dpdv);
+  const Eigen::Matrix2d M = P * b.B[0].inverse() * hslt->step_factors(x, *X)[0];
+  if (!M.allFinite()) return std::nullopt;
+  const Eigen::JacobiSVD<Eigen::Matrix2d> svd(M, Eigen::ComputeFullU);
+  const Eigen::Vector2d d = svd.singularValues();
+  if (!(d(1) > 0.0)) return std::nullopt;
+  p.to_plane = svd.matrixU() * d.asDiagonal();
+  p.to_chart = p.to_plane.inverse();
+  p.det = d(0) * d(1);
+  return p;
+}
+
+std::optional<Vec2> HsltTangentProjection::sample(Uniforms& u) const {
+  const auto y = mutation->propose(x, u);
+  if (!y) return std::nullopt;
+  const Vec3 d = y->v[1].hit.p - o;
+  const Eigen::Vector2d q = to_chart * Eigen::Vector2d(glm::dot(d, s), glm::dot(d, t));
+  if (!(std::abs(q(0)) <= kHalfWidth && std::abs(q(1)) <= kHalfWidth)) return std::nullopt;  // off the chart
+  return Vec2(q(0), q(1));
+}
+
+double HsltTangentProjection::pdf(const Vec2& q) const {
+  // y_1: the point of x_1's shape below o + plane(q) along -n (first hit of that shape).
+  const Eigen::Vector2d pl = to_plane * Eigen::Vector2d(q.x, q.y);
+  const auto shape = x.v[1].hit.shape_id;
+  Ray ray{o + s * pl(0) + t * pl(1) + n * 0.5, -n, 0.0, kInfinity};
+  for (int i = 0; i < 16; ++i) {
+    const auto h = ctx->world->geometry().intersect(ray);
+    if (!h) return 0.0;
+    if (h->shape_id == shape) {
+      MltPath y = x;
+      y.v[1] = surface_vertex(*ctx, *h);
+      const double c = std::abs(glm::dot(y.v[1].hit.ng, n));
+      return c > 0.0 ? mutation->density(x, y) * det / c : 0.0;
+    }
+    ray.t_min = h->t + 1e-9;
+  }
+  return 0.0;
+}
 
 MltPath path_with_segments(const PathContext& ctx, int k, int max_depth, uint64_t seed) {
   for (uint64_t i = 0;; ++i) {
