@@ -32,6 +32,17 @@ const P& concrete_ramlt(const PathMutation& m) {
   throw std::logic_error("projection of '" + m.name() + "': the registered mutation is not of the expected type");
 }
 
+// A projection with the object its pointers refer to, owned.
+template <class P>
+struct KeepAlive {
+  P p;
+  std::shared_ptr<const void> owned;
+  std::optional<Vec2> sample(Uniforms& u) const { return p.sample(u); }
+  double pdf(const Vec2& q) const { return p.pdf(q); }
+  Vec2 chart_lo() const { return p.chart_lo(); }
+  Vec2 chart_hi() const { return p.chart_hi(); }
+};
+
 template <class P>
 PathProjectionList one(P p, std::string label) {
   PathProjectionList out;
@@ -203,10 +214,49 @@ std::vector<PathProjectionInfo>& table() {
          return one(RamltLensAngleProjection{&r, x, &in.checked}, fmt::format("k={}", x.segments()));
        }},
       {.name = "ramlt-multichain",
-       .no_projection_reason =
-           "not built: the conditional chart of the multi-chain projection (fixed primary move, direction at the "
-           "first continued level) needs the truncated-normal primary kernel in place of the lens kernel K_r; its "
-           "direction kernel is checked by mcmc.ramlt.direction.chi2"},
+       .coordinate = "direction change at the first continued level given the primary direction (phi, theta)",
+       .scenes = {"caustic.json", "dg-glass.json", "dg-mirror-chain.json"},
+       // As multi-chain: paths D S+ D S* E with one continued level, the first few of 20000 BDPT paths.
+       .paths =
+           [](const PathContext& ctx, const PathMutation& reg, uint64_t seed) {
+             const MultiChainPerturbation mc(ctx);
+             std::vector<MltPath> out;
+             for (uint64_t i = 0; i < 20000 && out.size() < 4; ++i) {
+               Rng r = Rng::for_sample(seed + 60, 0x72616d6c74ULL, i);
+               RngUniforms u(r);
+               auto p = sample_bdpt_path(ctx, u, kMaxDepth);
+               if (!p || !(reg.weight(*p) > 0.0)) continue;
+               const std::vector<int> lv = mc.levels(*p);
+               if (lv.size() == 2 && lv[0] < p->segments() - 1) out.push_back(std::move(*p));
+             }
+             return out;
+           },
+       // The first fixed primary whose move succeeds for at least half of 64 pilot proposals.
+       .make = [](const PathProjectionInput& in, const MltPath& x) -> PathProjectionList {
+         const auto& r = concrete_ramlt<RamltMultiChainPerturbation>(in.registered);
+         const auto mc = std::make_shared<const MultiChainPerturbation>(in.ctx);
+         const Vec2 offsets[] = {{0.3, 0.9}, {0.8, 0.95}, {0.55, 0.7}, {0.05, 0.8}, {0.3, 0.5}, {0.8, 0.9}};
+         for (const Vec2 uo : offsets) {
+           const RamltMultiChainAngleProjection p{&r, mc.get(), &in.ctx, x, uo, &in.checked};
+           int ok = 0;
+           for (uint64_t t = 0; t < 64; ++t) {
+             Rng rp = Rng::for_sample(in.seed + 61, 0x70696c6f74ULL, t);
+             RngUniforms up(rp);
+             ok += p.sample(up).has_value();
+           }
+           if (ok >= 32) {
+             const std::vector<int> lv = mc->levels(x);
+             return one(KeepAlive<RamltMultiChainAngleProjection>{p, mc},
+                        fmt::format("k={} levels={},{} u_primary=({},{})", x.segments(), lv[0], lv[1], uo.x, uo.y));
+           }
+         }
+         return {};
+       },
+       .cells_x = 21,
+       .cells_y = 21,
+       .quick_samples = 10000,
+       .full_samples = 100000,
+       .configs_per_scene = 1},
       {.name = "hslt",
        .coordinate = "y_1 on the tangent plane of x_1 in the chart of the step's first-order spread, k = 2",
        .scenes = {"glossy.json"},

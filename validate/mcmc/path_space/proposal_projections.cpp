@@ -215,6 +215,44 @@ double RamltLensAngleProjection::pdf(const Vec2& q) const {
 Vec2 RamltLensAngleProjection::chart_lo() const { return {0.0, 0.0}; }
 Vec2 RamltLensAngleProjection::chart_hi() const { return {2 * kPi, 0.4}; }
 
+Vec3 RamltMultiChainAngleProjection::primary() const {
+  return TruncatedNormalDirection::sample(RamltLensPerturbation::primary_direction(x), u_primary, ramlt->scale().sigma(x));
+}
+
+std::optional<Vec2> RamltMultiChainAngleProjection::sample(Uniforms& u) const {
+  OffsetFixedUniforms fu(u_primary, u);
+  const auto y = mutation->propose(x, fu);
+  if (!y) return std::nullopt;
+  const int j1 = structure->levels(x).front();
+  const Vec3 wx = apex_and_direction(x, j1).second, wy = apex_and_direction(*y, j1).second;
+  const Vec3 local = Frame::from_z(wx).to_local(wy);
+  double phi = std::atan2(local.y, local.x);
+  if (phi < 0) phi += 2 * kPi;
+  return Vec2(phi, std::atan2(glm::length(glm::cross(wx, wy)), glm::dot(wx, wy)));
+}
+
+double RamltMultiChainAngleProjection::pdf(const Vec2& q) const {
+  const double theta = q.y;
+  const std::vector<int> lv = structure->levels(x);
+  const int k = x.segments(), j1 = lv[0], j2 = lv[1];
+  const Vec3 wx = apex_and_direction(x, j1).second;
+  const Vec3 w = Frame::from_z(wx).to_world(
+      Vec3(std::sin(theta) * std::cos(q.x), std::sin(theta) * std::sin(q.x), std::cos(theta)));
+  const Vec3 p0 = primary();
+  const auto y = ramlt->perturb(x, p0, {w});
+  if (!y) return 0.0;
+  const PathDensities d = path_densities(*ctx, y->v, DiracPolicy::kCoefficientKeptLobe);
+  // The primary: its truncated-normal density (Otsu Eq. 2) in solid angle, to area at y_{k-1}.
+  double g = solid_angle_to_area(
+      TruncatedNormalDirection::density(
+          TruncatedNormalDirection::angle(RamltLensPerturbation::primary_direction(x), p0), ramlt->scale().sigma(x)),
+      y->v[k].hit.p, y->v[k - 1].hit.p, y->v[k - 1].geometric_normal());
+  for (int i = k - 1; i > j1; --i) g *= d.pE[i - 1];  // chain 1
+  g *= solid_angle_to_area(1.0, apex_and_direction(*y, j1).first, y->v[j1 - 1].hit.p, y->v[j1 - 1].geometric_normal());
+  for (int i = j1 - 1; i > j2; --i) g *= d.pE[i - 1];  // chain 2
+  return g > 0.0 ? mutation->density(x, *y) / g * std::sin(theta) : 0.0;
+}
+
 std::optional<HsltTangentProjection> HsltTangentProjection::at(const HsltMutation* hslt, const PathContext* ctx,
                                                                const MltPath& x, const PathMutation* mutation) {
   const auto X = hslt->hslt_path(x);

@@ -24,6 +24,13 @@
 //    factor enters) times sin(theta). Chart theta in [0, 0.4] (the registry's sigma = 0.05 rad
 //    leaves mass exp(-32) beyond; in theta, not ln theta, as the signed-normal kernel of
 //    ramlt_direction.h has a density of |theta| that is flat at 0).
+//  - RamltMultiChainAngleProjection: the regional adaptive multi-chain perturbation with its
+//    primary direction fixed (the first two uniforms, as MultiChainAngleProjection fixes the
+//    raster offset): the direction change at the first continued level as (phi, theta) about x's
+//    direction there (theta in [0, 0.4], as RamltLensAngleProjection); stated density T(x -> y)
+//    divided by g / sin(theta), g the path measure of y per unit solid angle of the level direction
+//    given the primary (its truncated-normal density times |cos| / d^2 at y_{k-1}, the specular
+//    factors of both chains from path_densities, |cos| / d^2 at the level's next vertex).
 //  - HsltTangentProjection: the half-vector mutation on a path light -> x_1 -> camera (k = 2, x_1
 //    glossy, so only h_1 moves): y_1 - x_1 on the tangent plane of x_1 in the chart of the step's
 //    first-order spread (q = D^{-1} U^T p, M = U D V^T the map from the step's standard normal z to
@@ -50,6 +57,7 @@
 #include "lib/mcmc/path_space/lens_perturbation.h"
 #include "lib/mcmc/path_space/multi_chain_perturbation.h"
 #include "lib/mcmc/path_space/path_mutations.h"
+#include "lib/mcmc/path_space/ramlt_direction.h"
 #include "lib/mcmc/path_space/ramlt_perturbations.h"
 
 namespace tb::path_space {
@@ -127,6 +135,20 @@ struct RamltLensAngleProjection {
   double pdf(const Vec2& phi_rho) const;
   Vec2 chart_lo() const;
   Vec2 chart_hi() const;
+};
+
+struct RamltMultiChainAngleProjection {
+  const RamltMultiChainPerturbation* ramlt = nullptr;  // the chart (perturb, sigma)
+  const MultiChainPerturbation* structure = nullptr;   // levels
+  const PathContext* ctx = nullptr;
+  MltPath x;                 // structure->levels(x).size() == 2
+  Vec2 u_primary{0.3, 0.5};  // the fixed uniforms of the primary direction
+  const PathMutation* mutation = nullptr;  // whose propose() and density() are tested
+  std::optional<Vec2> sample(Uniforms& u) const;
+  double pdf(const Vec2& phi_theta) const;
+  Vec2 chart_lo() const { return {0.0, 0.0}; }
+  Vec2 chart_hi() const { return {2 * kPi, 0.4}; }
+  Vec3 primary() const;  // the fixed primary direction
 };
 
 struct HsltTangentProjection {
