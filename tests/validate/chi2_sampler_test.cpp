@@ -116,5 +116,44 @@ TEST(Chi2Sampler, HeatmapsAndDetails) {
   EXPECT_TRUE(d.contains("p_value"));
 }
 
+
+// A density on slivers (7 strips 0.003 wide across 5 x 5 cells, weights 1..7): the Monte Carlo
+// expected counts (jittered replicates, their variance in the denominators) pass the correct
+// statement and reject one with the strip weights misstated by 15 %.
+struct Strips {
+  static constexpr int kN = 7;
+  static constexpr double kWidth = 0.003;
+  static double left(int i) { return 0.05 + 0.137 * i; }
+  static double weight(int i) { return (i + 1) / 28.0; }  // sums to 1
+  static std::optional<Vec2> sample(Uniforms& u) {
+    const double a = u.next();
+    int i = 0;
+    for (double c = weight(0); a >= c && i + 1 < kN; c += weight(++i)) {
+    }
+    return Vec2(left(i) + kWidth * u.next(), u.next());
+  }
+  static double pdf(const Vec2& q, double tilt) {
+    for (int i = 0; i < kN; ++i)
+      if (q.x >= left(i) && q.x < left(i) + kWidth) return weight(i) * (1.0 + tilt * (i - 3)) / kWidth;
+    return 0.0;
+  }
+};
+
+TEST(Chi2Sampler, MonteCarloExpectedCountsOnSlivers) {
+  SamplerChi2Options o = opts(100000, 11);
+  o.monte_carlo_expected = true;
+  const Chi2Domain d = Chi2Domain::rectangle({0.0, 0.0}, {1.0, 1.0}, 5, 5);
+  const SamplerChi2Result r =
+      chi2_test(d, [](Uniforms& u) { return Strips::sample(u); }, [](const Vec2& q) { return Strips::pdf(q, 0.0); }, o);
+  EXPECT_TRUE(r.passed(kAlpha)) << r.message();
+  EXPECT_EQ(r.expected_variance.size(), 25u);
+  EXPECT_GT(r.pdf_evaluations, 0);
+  EXPECT_NEAR(r.pdf_integral, 1.0, 0.02);
+  o.key = 12;
+  const SamplerChi2Result b =
+      chi2_test(d, [](Uniforms& u) { return Strips::sample(u); }, [](const Vec2& q) { return Strips::pdf(q, 0.05); }, o);
+  EXPECT_FALSE(b.passed(kAlpha)) << b.message();
+}
+
 }  // namespace
 }  // namespace tb

@@ -1,6 +1,7 @@
 #include "validate/chi2/pearson_gof.h"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <stdexcept>
 #include <vector>
@@ -17,10 +18,14 @@ PearsonResult pearson_chi2_gof(std::span<const double> observed, std::span<const
   if (observed.size() != expected.size()) throw std::invalid_argument("pearson_chi2_gof: size mismatch");
   const auto name = [&](size_t i) { return cell_name ? cell_name(i) : fmt::format("cell {}", i); };
   PearsonResult r;
+  const bool estimated = !options.expected_variance.empty();
+  if (estimated && options.expected_variance.size() != expected.size())
+    throw std::invalid_argument("pearson_chi2_gof: variance size mismatch");
+  const auto var = [&](size_t i) { return estimated ? options.expected_variance[i] : 0.0; };
 
   // Hard failure: samples where the distribution puts no mass at all.
   for (size_t i = 0; i < observed.size(); ++i) {
-    if (expected[i] <= 0 && observed[i] > 0) {
+    if (!estimated && expected[i] <= 0 && observed[i] > 0) {
       if (r.zero_expected_cells == 0) r.first_zero_expected_cell = name(i);
       ++r.zero_expected_cells;
       r.zero_expected_observed += observed[i];
@@ -40,32 +45,44 @@ PearsonResult pearson_chi2_gof(std::span<const double> observed, std::span<const
   std::vector<size_t> order(observed.size());
   std::iota(order.begin(), order.end(), size_t{0});
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return expected[a] < expected[b]; });
-  std::vector<std::pair<double, double>> cells;  // (observed, expected)
-  CompensatedSum pool_o, pool_e;
+  struct Cell {
+    double o, e, v;
+  };
+  std::vector<Cell> cells;
+  CompensatedSum pool_o, pool_e, pool_v;
   for (size_t i : order) {
-    if (expected[i] <= 0) continue;  // zero mass and (checked above) no observations
+    if (expected[i] <= 0 && observed[i] <= 0 && var(i) <= 0) continue;  // no mass, no observations
     if (expected[i] < options.min_expected) {
       pool_o += observed[i];
-      pool_e += expected[i];
+      pool_e += std::max(0.0, expected[i]);
+      pool_v += var(i);
       ++r.pooled_cells;
     } else {
-      cells.emplace_back(observed[i], expected[i]);
+      cells.push_back({observed[i], expected[i], var(i)});
     }
   }
   r.pooled_observed = pool_o.value();
   r.pooled_expected = pool_e.value();
   if (r.pooled_cells > 0) {
     if (r.pooled_expected >= options.min_expected || cells.empty()) {
-      cells.emplace_back(r.pooled_observed, r.pooled_expected);
+      cells.push_back({r.pooled_observed, r.pooled_expected, pool_v.value()});
     } else {
       // cells are in increasing order of expected count: cells[0] is the smallest regular cell.
-      cells[0].first += r.pooled_observed;
-      cells[0].second += r.pooled_expected;
+      cells[0].o += r.pooled_observed;
+      cells[0].e += r.pooled_expected;
+      cells[0].v += pool_v.value();
     }
   }
   r.cells = cells.size();
   CompensatedSum stat;
-  for (const auto& [o, e] : cells) stat += sqr(o - e) / e;
+  for (const Cell& c : cells) {
+    const double denom = c.e + c.v;
+    if (denom > 0) {
+      stat += sqr(c.o - c.e) / denom;
+    } else if (c.o > 0) {  // an estimated pool of zero mass that holds observations
+      stat += kInfinity;
+    }
+  }
   r.statistic = stat.value();
   r.dof = static_cast<int>(cells.size()) - 1;
   if (r.dof < 1) {
@@ -74,7 +91,7 @@ PearsonResult pearson_chi2_gof(std::span<const double> observed, std::span<const
     return r;
   }
   const boost::math::chi_squared_distribution<double> chi2(r.dof);
-  r.p_value = boost::math::cdf(boost::math::complement(chi2, r.statistic));
+  r.p_value = std::isfinite(r.statistic) ? boost::math::cdf(boost::math::complement(chi2, r.statistic)) : 0.0;
   r.message = fmt::format("chi2 = {:.1f}, dof = {}, p = {:.3g} ({} cells pooled, E = {:.1f})", r.statistic, r.dof,
                           r.p_value, r.pooled_cells, r.pooled_expected);
   return r;

@@ -3,6 +3,12 @@
 // cell, as Mitsuba 3's chi2 test does; any observation in a cell of zero expected mass fails
 // hard (p = 0) and names the cell. dof = cells after pooling - 1; the p-value is the upper
 // tail of Boost.Math's chi_squared distribution.
+//
+// Estimated expected counts (a Monte Carlo integral of the stated density, sampler_chi2.h): with
+// expected_variance set, cell i's term is (O - E)^2 / (E + V_i), V_i the variance of the estimate
+// E_i (O and E independent, so O - E has variance E + V under the null hypothesis; Gagunashvili's
+// comparison of weighted and unweighted histograms, with the normalisation known), and a cell whose
+// estimate is zero is pooled rather than a hard failure (the estimate may miss a sliver of mass).
 #pragma once
 
 #include <cstddef>
@@ -14,6 +20,8 @@ namespace tb {
 
 struct PearsonOptions {
   double min_expected = 5.0;  // cells below this expected count are pooled
+  // Empty: exact expected counts. Else one variance per cell (same length as expected).
+  std::span<const double> expected_variance = {};
 };
 
 struct PearsonResult {

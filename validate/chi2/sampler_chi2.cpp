@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "lib/core/frame.h"
+#include "lib/core/hash.h"
 #include "lib/core/parallel.h"
 
 namespace tb {
@@ -96,6 +97,51 @@ std::vector<double> cell_masses(const Chi2Domain& d, const std::function<double(
   return mass;
 }
 
+// Monte Carlo integral of the pdf over every cell (SamplerChi2Options::monte_carlo_expected):
+// mass and the variance of its estimate per cell, in units of probability.
+struct CellEstimates {
+  std::vector<double> mass, variance;
+  int64_t evaluations = 0;
+};
+CellEstimates cell_masses_mc(const Chi2Domain& d, const std::function<double(Vec2)>& pdf, const SamplerChi2Options& o) {
+  const CellGeometry g{d};
+  const size_t n_cells = static_cast<size_t>(d.nx) * static_cast<size_t>(d.ny);
+  CellEstimates e;
+  e.mass.resize(n_cells);
+  e.variance.resize(n_cells);
+  std::vector<int64_t> evals(n_cells, 0);
+  const int reps = std::max(2, o.mc_replicates);
+  const double n = static_cast<double>(o.samples);
+  const uint64_t key = hash_values(o.key, hash_string("expected"));
+  parallel_for(n_cells, [&](size_t c) {
+    const int ix = static_cast<int>(c % static_cast<size_t>(d.nx)), iy = static_cast<int>(c / static_cast<size_t>(d.nx));
+    const double x0 = g.x0(ix), y0 = g.y0(iy), wx = g.x1(ix) - x0, wy = g.y1(iy) - y0;
+    Rng rng = Rng::for_sample(o.seed, key, c);
+    for (int m = std::max(1, o.mc_grid_min);; m *= 2) {
+      std::vector<double> rep(static_cast<size_t>(reps));
+      for (int r = 0; r < reps; ++r) {
+        CompensatedSum s;
+        for (int j = 0; j < m; ++j)
+          for (int i = 0; i < m; ++i) {
+            const Vec2 u = rng.uniform2();
+            s += pdf({x0 + (i + u.x) / m * wx, y0 + (j + u.y) / m * wy});
+          }
+        rep[static_cast<size_t>(r)] = s.value() / (static_cast<double>(m) * m) * wx * wy;
+        evals[c] += static_cast<int64_t>(m) * m;
+      }
+      const double mean = std::accumulate(rep.begin(), rep.end(), 0.0) / reps;
+      double ss = 0;
+      for (double v : rep) ss += sqr(v - mean);
+      const double var = ss / (reps - 1) / reps;
+      e.mass[c] = mean;
+      e.variance[c] = var;
+      if (n * n * var <= o.mc_variance_fraction * (n * mean + 1.0) || 2 * m > o.mc_grid_max) break;
+    }
+  });
+  for (int64_t v : evals) e.evaluations += v;
+  return e;
+}
+
 std::string cell_name(const Chi2Domain& d, size_t c) {
   const CellGeometry g{d};
   if (c == static_cast<size_t>(d.nx) * static_cast<size_t>(d.ny)) return "failed samples (sampler returned nothing)";
@@ -118,11 +164,24 @@ SamplerChi2Result run_sampler_chi2(const Chi2Domain& d, const std::function<Chi2
   const size_t n_cells = static_cast<size_t>(d.nx) * static_cast<size_t>(d.ny);
 
   // Expected counts.
-  const std::vector<double> mass = cell_masses(d, pdf_param, o);
+  const double n = static_cast<double>(o.samples);
+  std::vector<double> mass;
+  CompensatedSum total_variance;
+  if (o.monte_carlo_expected) {
+    CellEstimates e = cell_masses_mc(d, pdf_param, o);
+    mass = std::move(e.mass);
+    r.pdf_evaluations = e.evaluations;
+    r.expected_variance.resize(n_cells);
+    for (size_t c = 0; c < n_cells; ++c) {
+      r.expected_variance[c] = n * n * e.variance[c];
+      total_variance += e.variance[c];
+    }
+  } else {
+    mass = cell_masses(d, pdf_param, o);
+  }
   CompensatedSum total;
   for (double m : mass) total += m;
   r.pdf_integral = total.value();
-  const double n = static_cast<double>(o.samples);
   r.expected.resize(n_cells);
   for (size_t c = 0; c < n_cells; ++c) r.expected[c] = n * mass[c];
 
@@ -169,7 +228,11 @@ SamplerChi2Result run_sampler_chi2(const Chi2Domain& d, const std::function<Chi2
   const double deficit = 1.0 - r.pdf_integral;
   obs.push_back(static_cast<double>(r.failed));
   exp.push_back(deficit > o.failure_mass_floor ? n * deficit : 0.0);
-  r.gof = pearson_chi2_gof(obs, exp, {.min_expected = o.min_expected}, [&](size_t c) { return cell_name(d, c); });
+  std::vector<double> var = r.expected_variance;
+  // The failure cell's estimate is 1 minus the sum of the cells' (independent) estimates.
+  if (o.monte_carlo_expected) var.push_back(n * n * total_variance.value());
+  r.gof = pearson_chi2_gof(obs, exp, {.min_expected = o.min_expected, .expected_variance = var},
+                           [&](size_t c) { return cell_name(d, c); });
 
   // Worst cells by standardized residual.
   std::vector<Chi2Cell> cells;
@@ -185,7 +248,8 @@ SamplerChi2Result run_sampler_chi2(const Chi2Domain& d, const std::function<Chi2
     }
     cell.observed = obs[c];
     cell.expected = exp[c];
-    cell.residual = exp[c] > 0 ? (obs[c] - exp[c]) / std::sqrt(exp[c]) : kInfinity;
+    const double v = exp[c] + (var.empty() ? 0.0 : var[c]);
+    cell.residual = v > 0 ? (obs[c] - exp[c]) / std::sqrt(v) : kInfinity;
     cells.push_back(cell);
   }
   const size_t k = std::min(cells.size(), static_cast<size_t>(std::max(0, o.worst_cells)));
@@ -223,6 +287,14 @@ nlohmann::json SamplerChi2Result::details() const {
                       {"pooled_cells", gof.pooled_cells},
                       {"pooled_expected", gof.pooled_expected},
                       {"worst_cells", worst_json}};
+  if (!expected_variance.empty()) {
+    double max_ratio = 0;  // largest V / E over cells with E >= 5
+    for (size_t c = 0; c < expected.size(); ++c)
+      if (expected[c] >= 5) max_ratio = std::max(max_ratio, expected_variance[c] / expected[c]);
+    j["expected_by"] = "monte carlo";
+    j["pdf_evaluations"] = pdf_evaluations;
+    j["max_expected_variance_ratio"] = max_ratio;
+  }
   if (outside > 0) j["first_outside"] = first_outside;
   if (gof.zero_expected_cells > 0) j["first_zero_expected_cell"] = gof.first_zero_expected_cell;
   return j;

@@ -73,6 +73,17 @@ struct SamplerChi2Options {
   // (a disk rim, a triangle edge) cheap.
   double quadrature_tolerance = 1e-8;
   int quadrature_max_depth = 6;         // bisections per level (nested: cost grows as 4^depth at a 2D edge)
+  // Expected counts by a Monte Carlo integral of the pdf instead of quadrature: for a stated
+  // density that quadrature cannot resolve (support or peaks in slivers narrower than its nodes'
+  // spacing, e.g. a surface seen edge-on). Per cell, mc_replicates independent jittered m x m
+  // grids (m = mc_grid_min, doubled while the estimate's variance V (in counts^2) exceeds
+  // mc_variance_fraction * (E + 1), up to mc_grid_max); the estimate is their mean, V its
+  // sample variance over the replicates / mc_replicates, and Pearson's terms are
+  // (O - E)^2 / (E + V) (pearson_gof.h). Streams: seed, hash(key, "expected"), the cell.
+  bool monte_carlo_expected = false;
+  int mc_replicates = 8;
+  int mc_grid_min = 16, mc_grid_max = 128;
+  double mc_variance_fraction = 0.1;
   // A failed sample is legitimate only where the pdf integrates to less than one: the
   // failure cell's expected count is N (1 - integral), taken as zero when 1 - integral is
   // below this (a quadrature error, not a real deficit).
@@ -94,6 +105,8 @@ struct SamplerChi2Result {
   std::string first_outside;        // the first sample outside the domain, printed
   double pdf_integral = 0;          // integral of the pdf over the domain (should be <= 1)
   std::vector<double> observed, expected;  // nx * ny cells, row-major (row = y)
+  std::vector<double> expected_variance;   // Monte Carlo expected counts: per cell (else empty)
+  int64_t pdf_evaluations = 0;             // Monte Carlo expected counts: points evaluated
   PearsonResult gof;
   std::vector<Chi2Cell> worst;      // largest |standardized residual| first
 

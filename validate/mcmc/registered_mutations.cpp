@@ -529,6 +529,7 @@ CheckResult path_registered_mutations_chi2(const CheckContext& ctx, const std::s
             o.seed = ctx.seed;
             o.key = hash_values(hash_string(name + "." + mn + "." + file), static_cast<uint64_t>(configs));
             o.quadrature_max_depth = proj->quadrature_max_depth;
+            o.monte_carlo_expected = proj->monte_carlo_expected;
             tests.push_back({mn, file, p->label(),
                              chi2_test(Chi2Domain::rectangle(p->chart_lo(), p->chart_hi(), proj->cells_x, proj->cells_y),
                                        [&p](Uniforms& u) { return p->sample(u); },

@@ -81,7 +81,8 @@ CheckResult path_registered_mutations_flux_bins(const CheckContext& ctx, const s
 // (validate/mcmc/path_space/path_projections.h): on each scene of its declaration (16 x 16), test
 // paths from seeded BDPT samples (max depth 4), at each the declared configurations; y proposed by
 // the mutation (or its wrapper) mapped to the chart, against the chart density stated from its
-// density(x, y) (validate/chi2: expected counts by adaptive quadrature, failed proposals and the
+// density(x, y) (validate/chi2: expected counts by adaptive quadrature or, where the projection
+// asks for it, a Monte Carlo integral with its variance in the statistic; failed proposals and the
 // stated mass off the chart in one cell). Šidák over every (mutation, configuration) test at family
 // alpha 1e-5; fixed seeds from ctx.seed, the name, the mutation and the scene. A registered mutation
 // with no declared projection FAILS the check (named in the message); one declared without a

@@ -9,6 +9,7 @@
 #include "lib/core/frame.h"
 #include "lib/core/hash.h"
 #include "lib/geometry/spawn.h"
+#include "lib/path/path.h"
 #include "lib/mcmc/path_space/start_paths.h"
 #include "validate/mcmc/path_space/proposal_projections.h"
 
@@ -30,6 +31,17 @@ const P& concrete_ramlt(const PathMutation& m) {
   if (const auto* p = dynamic_cast<const RamltMutation<P>*>(&m)) return p->proposal();
   throw std::logic_error("projection of '" + m.name() + "': the registered mutation is not of the expected type");
 }
+
+// A projection with the object its pointers refer to, owned.
+template <class P>
+struct KeepAlive {
+  P p;
+  std::shared_ptr<const void> owned;
+  std::optional<Vec2> sample(Uniforms& u) const { return p.sample(u); }
+  double pdf(const Vec2& q) const { return p.pdf(q); }
+  Vec2 chart_lo() const { return p.chart_lo(); }
+  Vec2 chart_hi() const { return p.chart_hi(); }
+};
 
 template <class P>
 PathProjectionList one(P p, std::string label) {
@@ -123,7 +135,8 @@ std::vector<PathProjectionInfo>& table() {
        .cells_y = 7,
        // About 5 % of the whole mutation's proposals take the one-vertex way with f(y) > 0.
        .quick_samples = 300000,
-       .full_samples = 3000000},
+       .full_samples = 3000000,
+       .monte_carlo_expected = true},
       {.name = "lens",
        .coordinate = "raster offset (phi, ln r)",
        .scenes = {"cornell-box.json"},
@@ -201,15 +214,84 @@ std::vector<PathProjectionInfo>& table() {
          return one(RamltLensAngleProjection{&r, x, &in.checked}, fmt::format("k={}", x.segments()));
        }},
       {.name = "ramlt-multichain",
-       .no_projection_reason =
-           "not built: the conditional chart of the multi-chain projection (fixed primary move, direction at the "
-           "first continued level) needs the truncated-normal primary kernel in place of the lens kernel K_r; its "
-           "direction kernel is checked by mcmc.ramlt.direction.chi2"},
+       .coordinate = "direction change at the first continued level given the primary direction (phi, theta)",
+       .scenes = {"caustic.json", "dg-glass.json", "dg-mirror-chain.json"},
+       // As multi-chain: paths D S+ D S* E with one continued level, the first 8 of 100000 BDPT paths (the
+       // primary and level steps, 0.05 rad, often change a chain: more candidates than multi-chain's).
+       .paths =
+           [](const PathContext& ctx, const PathMutation& reg, uint64_t seed) {
+             const MultiChainPerturbation mc(ctx);
+             std::vector<MltPath> out;
+             for (uint64_t i = 0; i < 100000 && out.size() < 8; ++i) {
+               Rng r = Rng::for_sample(seed + 60, 0x72616d6c74ULL, i);
+               RngUniforms u(r);
+               auto p = sample_bdpt_path(ctx, u, kMaxDepth);
+               if (!p || !(reg.weight(*p) > 0.0)) continue;
+               const std::vector<int> lv = mc.levels(*p);
+               if (lv.size() == 2 && lv[0] < p->segments() - 1) out.push_back(std::move(*p));
+             }
+             return out;
+           },
+       // The first fixed primary whose move succeeds for at least 16 of 64 pilot proposals (Monte Carlo
+       // expected counts resolve a narrow success region).
+       .make = [](const PathProjectionInput& in, const MltPath& x) -> PathProjectionList {
+         const auto& r = concrete_ramlt<RamltMultiChainPerturbation>(in.registered);
+         const auto mc = std::make_shared<const MultiChainPerturbation>(in.ctx);
+         const Vec2 offsets[] = {{0.3, 0.9}, {0.8, 0.95}, {0.55, 0.7}, {0.05, 0.8}, {0.3, 0.5}, {0.8, 0.9}};
+         for (const Vec2 uo : offsets) {
+           const RamltMultiChainAngleProjection p{&r, mc.get(), &in.ctx, x, uo, &in.checked};
+           int ok = 0;
+           for (uint64_t t = 0; t < 64; ++t) {
+             Rng rp = Rng::for_sample(in.seed + 61, 0x70696c6f74ULL, t);
+             RngUniforms up(rp);
+             ok += p.sample(up).has_value();
+           }
+           if (ok >= 16) {
+             const std::vector<int> lv = mc->levels(x);
+             return one(KeepAlive<RamltMultiChainAngleProjection>{p, mc},
+                        fmt::format("k={} levels={},{} u_primary=({},{})", x.segments(), lv[0], lv[1], uo.x, uo.y));
+           }
+         }
+         return {};
+       },
+       .cells_x = 21,
+       .cells_y = 21,
+       .quick_samples = 10000,
+       .full_samples = 100000,
+       .monte_carlo_expected = true,
+       .configs_per_scene = 1},
       {.name = "hslt",
-       .no_projection_reason =
-           "not built for the registered instance: the half-vector mutation moves every vertex by a walk in "
-           "half-vector space; its chi-squares (mcmc.hslt.proposal_chi2.glossy, .dg_mirror) use a configured "
-           "instance (gamma 1, 0.5 % image change) on paths of one shape with a chart from the constraint blocks"},
+       .coordinate = "y_1 on the tangent plane of x_1 in the chart of the step's first-order spread, k = 2",
+       .scenes = {"glossy.json"},
+       // Paths light -> x_1 -> camera with x_1 on the rough gold sphere (Beckmann roughness >= 0.15),
+       // away from its silhouette (|cos| to the camera >= 0.5) so that the chart is regular over the
+       // support: the first of seeded BDPT samples (mcmc.hslt.proposal_chi2.glossy's paths).
+       .paths =
+           [](const PathContext& ctx, const PathMutation& reg, uint64_t seed) {
+             const auto& h = concrete<HsltMutation>(reg);
+             std::vector<MltPath> out;
+             for (uint64_t i = 0; i < 200000 && out.empty(); ++i) {
+               Rng r = Rng::for_sample(seed + 50, 0x68736c74ULL, i);
+               RngUniforms u(r);
+               auto p = sample_bdpt_path(ctx, u, 1, 2);
+               if (!p || p->segments() != 2 || !h.applicable(*p) || !(reg.weight(*p) > 0.0)) continue;
+               const PathVertex& v = p->v[1];
+               if (v.bsdf->name() != "rough_conductor" || v.bsdf->beckmann_roughness() < 0.15) continue;
+               if (std::abs(glm::dot(v.hit.ng, direction(v, p->v[2]))) < 0.5) continue;
+               out.push_back(std::move(*p));
+             }
+             return out;
+           },
+       .make = [](const PathProjectionInput& in, const MltPath& x) -> PathProjectionList {
+         const auto p = HsltTangentProjection::at(&concrete<HsltMutation>(in.registered), &in.ctx, x, &in.checked);
+         if (!p) return {};
+         return one(*p, fmt::format("k=2 x_1 on {}", x.v[1].bsdf->name()));
+       },
+       .cells_x = 15,
+       .cells_y = 15,
+       .quick_samples = 20000,
+       .full_samples = 200000,
+       .quadrature_max_depth = 2},
   };
   return t;
 }

@@ -12,13 +12,18 @@
 // projections are those of proposal_projections.h:
 //   bidirectional     the whole mutation through its one-vertex way at k = 3, 4: direction
 //                     x_{k-3} -> y_{k-2} in (phi, cos theta) (d omega = d phi d cos theta: the
-//                     solid-angle density), other ways failed samples;
+//                     solid-angle density), other ways failed samples; Monte Carlo expected
+//                     counts (its density lives on slivers of the chart);
 //   lens              raster offset (phi, ln r), Cornell box, k = 1, 2, 3;
 //   caustic           direction change (phi, ln theta), Cornell box, k = 2, 3;
 //   multi-chain       direction change at the first continued level given a fixed raster offset,
 //                     on the scenes with specular chains (one configuration per scene found,
 //                     paths D S+ D S* E with a non-empty first chain);
-//   ramlt-lens        primary direction change (phi, theta), Cornell box, k = 1, 2, 3.
+//   ramlt-lens        primary direction change (phi, theta), Cornell box, k = 1, 2, 3;
+//   ramlt-multichain  direction change at the first continued level given a fixed primary
+//                     direction (phi, theta), the scenes of multi-chain, Monte Carlo expected counts;
+//   hslt              y_1 on the tangent plane of x_1 in the chart of the step's first-order
+//                     spread, glossy.json, k = 2 (x_1 on the rough gold sphere).
 // A mutation may instead declare why it has no projection (no_projection_reason); the check prints
 // it. A registered mutation with neither fails the check, naming the mutation.
 //
@@ -72,12 +77,15 @@ struct PathProjectionInfo {
   // Bisections per level of the expected counts' quadrature (sampler_chi2.h): 3 keeps cells cut
   // by the image border cheap; more where the stated density has an integrable peak.
   int quadrature_max_depth = 3;
+  // Expected counts by a Monte Carlo integral of the stated density (sampler_chi2.h,
+  // monte_carlo_expected) instead: where the density lives on slivers quadrature misses.
+  bool monte_carlo_expected = false;
   int configs_per_scene = 0;  // at most this many configurations per scene (0: every one)
   // Non-empty: the mutation is declared to have no projection, for this reason (printed).
   std::string no_projection_reason = {};
 };
 
-// Every declared projection (Veach's four, ramlt-lens, and the declared exemptions).
+// Every declared projection (one per registered mutation).
 const std::vector<PathProjectionInfo>& path_projections();
 const PathProjectionInfo* find_path_projection(const std::string& mutation);
 // Run-time registration (tests, outside code), next to register_path_mutation.

@@ -5,6 +5,8 @@
 #include <utility>
 
 #include "lib/core/frame.h"
+#include "lib/differential/hslt_constraints.h"
+#include "lib/mcmc/path_space/path_state.h"
 #include "lib/geometry/spawn.h"
 #include "lib/mcmc/path_space/start_paths.h"
 #include "lib/path/dirac.h"
@@ -212,6 +214,101 @@ double RamltLensAngleProjection::pdf(const Vec2& q) const {
 
 Vec2 RamltLensAngleProjection::chart_lo() const { return {0.0, 0.0}; }
 Vec2 RamltLensAngleProjection::chart_hi() const { return {2 * kPi, 0.4}; }
+
+Vec3 RamltMultiChainAngleProjection::primary() const {
+  return TruncatedNormalDirection::sample(RamltLensPerturbation::primary_direction(x), u_primary, ramlt->scale().sigma(x));
+}
+
+std::optional<Vec2> RamltMultiChainAngleProjection::sample(Uniforms& u) const {
+  OffsetFixedUniforms fu(u_primary, u);
+  const auto y = mutation->propose(x, fu);
+  if (!y) return std::nullopt;
+  const int j1 = structure->levels(x).front();
+  const Vec3 wx = apex_and_direction(x, j1).second, wy = apex_and_direction(*y, j1).second;
+  const Vec3 local = Frame::from_z(wx).to_local(wy);
+  double phi = std::atan2(local.y, local.x);
+  if (phi < 0) phi += 2 * kPi;
+  return Vec2(phi, std::atan2(glm::length(glm::cross(wx, wy)), glm::dot(wx, wy)));
+}
+
+double RamltMultiChainAngleProjection::pdf(const Vec2& q) const {
+  const double theta = q.y;
+  const std::vector<int> lv = structure->levels(x);
+  const int k = x.segments(), j1 = lv[0], j2 = lv[1];
+  const Vec3 wx = apex_and_direction(x, j1).second;
+  const Vec3 w = Frame::from_z(wx).to_world(
+      Vec3(std::sin(theta) * std::cos(q.x), std::sin(theta) * std::sin(q.x), std::cos(theta)));
+  const Vec3 p0 = primary();
+  const auto y = ramlt->perturb(x, p0, {w});
+  if (!y) return 0.0;
+  const PathDensities d = path_densities(*ctx, y->v, DiracPolicy::kCoefficientKeptLobe);
+  // The primary: its truncated-normal density (Otsu Eq. 2) in solid angle, to area at y_{k-1}.
+  double g = solid_angle_to_area(
+      TruncatedNormalDirection::density(
+          TruncatedNormalDirection::angle(RamltLensPerturbation::primary_direction(x), p0), ramlt->scale().sigma(x)),
+      y->v[k].hit.p, y->v[k - 1].hit.p, y->v[k - 1].geometric_normal());
+  for (int i = k - 1; i > j1; --i) g *= d.pE[i - 1];  // chain 1
+  g *= solid_angle_to_area(1.0, apex_and_direction(*y, j1).first, y->v[j1 - 1].hit.p, y->v[j1 - 1].geometric_normal());
+  for (int i = j1 - 1; i > j2; --i) g *= d.pE[i - 1];  // chain 2
+  return g > 0.0 ? mutation->density(x, *y) / g * std::sin(theta) : 0.0;
+}
+
+std::optional<HsltTangentProjection> HsltTangentProjection::at(const HsltMutation* hslt, const PathContext* ctx,
+                                                               const MltPath& x, const PathMutation* mutation) {
+  const auto X = hslt->hslt_path(x);
+  if (!X || X->vertices.size() != 3) return std::nullopt;
+  HsltTangentProjection p;
+  p.hslt = hslt;
+  p.ctx = ctx;
+  p.x = x;
+  p.mutation = mutation;
+  const HsltVertex& v1 = X->vertices[1];
+  const HsltFrame fr = hslt_frame(v1);
+  p.o = v1.p;
+  p.n = v1.n;
+  p.s = fr.s;
+  p.t = fr.t;
+  const HsltBlocks b = hslt_constraint_blocks(*X);
+  Eigen::Matrix2d P;
+  P << glm::dot(fr.s, v1.dpdu), glm::dot(fr.s, v1.dpdv), glm::dot(fr.t, v1.dpdu), glm::dot(fr.t, v1.dpdv);
+  const Eigen::Matrix2d M = P * b.B[0].inverse() * hslt->step_factors(x, *X)[0];
+  if (!M.allFinite()) return std::nullopt;
+  const Eigen::JacobiSVD<Eigen::Matrix2d> svd(M, Eigen::ComputeFullU);
+  const Eigen::Vector2d d = svd.singularValues();
+  if (!(d(1) > 0.0)) return std::nullopt;
+  p.to_plane = svd.matrixU() * d.asDiagonal();
+  p.to_chart = p.to_plane.inverse();
+  p.det = d(0) * d(1);
+  return p;
+}
+
+std::optional<Vec2> HsltTangentProjection::sample(Uniforms& u) const {
+  const auto y = mutation->propose(x, u);
+  if (!y) return std::nullopt;
+  const Vec3 d = y->v[1].hit.p - o;
+  const Eigen::Vector2d q = to_chart * Eigen::Vector2d(glm::dot(d, s), glm::dot(d, t));
+  if (!(std::abs(q(0)) <= kHalfWidth && std::abs(q(1)) <= kHalfWidth)) return std::nullopt;  // off the chart
+  return Vec2(q(0), q(1));
+}
+
+double HsltTangentProjection::pdf(const Vec2& q) const {
+  // y_1: the point of x_1's shape below o + plane(q) along -n (first hit of that shape).
+  const Eigen::Vector2d pl = to_plane * Eigen::Vector2d(q.x, q.y);
+  const auto shape = x.v[1].hit.shape_id;
+  Ray ray{o + s * pl(0) + t * pl(1) + n * 0.5, -n, 0.0, kInfinity};
+  for (int i = 0; i < 16; ++i) {
+    const auto h = ctx->world->geometry().intersect(ray);
+    if (!h) return 0.0;
+    if (h->shape_id == shape) {
+      MltPath y = x;
+      y.v[1] = surface_vertex(*ctx, *h);
+      const double c = std::abs(glm::dot(y.v[1].hit.ng, n));
+      return c > 0.0 ? mutation->density(x, y) * det / c : 0.0;
+    }
+    ray.t_min = h->t + 1e-9;
+  }
+  return 0.0;
+}
 
 MltPath path_with_segments(const PathContext& ctx, int k, int max_depth, uint64_t seed) {
   for (uint64_t i = 0;; ++i) {

@@ -24,7 +24,22 @@
 //    factor enters) times sin(theta). Chart theta in [0, 0.4] (the registry's sigma = 0.05 rad
 //    leaves mass exp(-32) beyond; in theta, not ln theta, as the signed-normal kernel of
 //    ramlt_direction.h has a density of |theta| that is flat at 0).
-// The lens, caustic, multi-chain and ramlt-lens projections take an optional PathMutation
+//  - RamltMultiChainAngleProjection: the regional adaptive multi-chain perturbation with its
+//    primary direction fixed (the first two uniforms, as MultiChainAngleProjection fixes the
+//    raster offset): the direction change at the first continued level as (phi, theta) about x's
+//    direction there (theta in [0, 0.4], as RamltLensAngleProjection); stated density T(x -> y)
+//    divided by g / sin(theta), g the path measure of y per unit solid angle of the level direction
+//    given the primary (its truncated-normal density times |cos| / d^2 at y_{k-1}, the specular
+//    factors of both chains from path_densities, |cos| / d^2 at the level's next vertex).
+//  - HsltTangentProjection: the half-vector mutation on a path light -> x_1 -> camera (k = 2, x_1
+//    glossy, so only h_1 moves): y_1 - x_1 on the tangent plane of x_1 in the chart of the step's
+//    first-order spread (q = D^{-1} U^T p, M = U D V^T the map from the step's standard normal z to
+//    the plane, M = P B^{-1} L: P the surface's tangents in the plane, B the constraint block of
+//    Kaplanyan et al. 2014 Eq. 11, L the step factor of Sec. 6.1-6.3), so q is standard normal to
+//    first order; stated density T(x -> y) |det D| / |<ng(y_1), n(x_1)>| (area to plane to chart);
+//    chart [-5, 5]^2, proposals off it failed samples (the stated mass off it enters the failure
+//    cell). The idea of mcmc.hslt.proposal_chi2.glossy, on the registered instance.
+// The lens, caustic, multi-chain, ramlt-lens and hslt projections take an optional PathMutation
 // (`mutation`): when set, proposals are its propose() and the stated density its density() (the
 // registered mutation or a wrapper of it, validate/mcmc/path_space/path_projections.h), and the
 // concrete perturbation supplies only the chart (perturb, Jacobians).
@@ -34,11 +49,15 @@
 #include <functional>
 #include <optional>
 
+#include <Eigen/Dense>
+
 #include "lib/mcmc/path_space/bidirectional_mutation.h"
 #include "lib/mcmc/path_space/caustic_perturbation.h"
+#include "lib/mcmc/path_space/hslt_mutation.h"
 #include "lib/mcmc/path_space/lens_perturbation.h"
 #include "lib/mcmc/path_space/multi_chain_perturbation.h"
 #include "lib/mcmc/path_space/path_mutations.h"
+#include "lib/mcmc/path_space/ramlt_direction.h"
 #include "lib/mcmc/path_space/ramlt_perturbations.h"
 
 namespace tb::path_space {
@@ -116,6 +135,39 @@ struct RamltLensAngleProjection {
   double pdf(const Vec2& phi_rho) const;
   Vec2 chart_lo() const;
   Vec2 chart_hi() const;
+};
+
+struct RamltMultiChainAngleProjection {
+  const RamltMultiChainPerturbation* ramlt = nullptr;  // the chart (perturb, sigma)
+  const MultiChainPerturbation* structure = nullptr;   // levels
+  const PathContext* ctx = nullptr;
+  MltPath x;                 // structure->levels(x).size() == 2
+  Vec2 u_primary{0.3, 0.5};  // the fixed uniforms of the primary direction
+  const PathMutation* mutation = nullptr;  // whose propose() and density() are tested
+  std::optional<Vec2> sample(Uniforms& u) const;
+  double pdf(const Vec2& phi_theta) const;
+  Vec2 chart_lo() const { return {0.0, 0.0}; }
+  Vec2 chart_hi() const { return {2 * kPi, 0.4}; }
+  Vec3 primary() const;  // the fixed primary direction
+};
+
+struct HsltTangentProjection {
+  const HsltMutation* hslt = nullptr;  // the chart (hslt_path, step_factors)
+  const PathContext* ctx = nullptr;
+  MltPath x;  // k = 2, x_1 not Dirac, hslt->applicable(x)
+  const PathMutation* mutation = nullptr;  // whose propose() and density() are tested
+  Eigen::Matrix2d to_chart = Eigen::Matrix2d::Identity(), to_plane = Eigen::Matrix2d::Identity();
+  double det = 1.0;
+  Vec3 o{0.0}, n{0.0, 0.0, 1.0}, s{1.0, 0.0, 0.0}, t{0.0, 1.0, 0.0};  // x_1, its normal and tangent frame
+  // Chart half-width: first-order radial mass beyond it exp(-12.5) = 4e-6 (stated, in the failure cell).
+  static constexpr double kHalfWidth = 5.0;
+  // The chart at x (nothing when x's half-vector form or its blocks fail).
+  static std::optional<HsltTangentProjection> at(const HsltMutation* hslt, const PathContext* ctx, const MltPath& x,
+                                                 const PathMutation* mutation);
+  std::optional<Vec2> sample(Uniforms& u) const;
+  double pdf(const Vec2& q) const;
+  Vec2 chart_lo() const { return {-kHalfWidth, -kHalfWidth}; }
+  Vec2 chart_hi() const { return {kHalfWidth, kHalfWidth}; }
 };
 
 // A BDPT-sampled path with exactly k segments (deterministic in seed).
