@@ -554,7 +554,7 @@ CheckResult path_registered_mutations_chi2(const CheckContext& ctx, const std::s
   CheckResult all;
   all.statistic_name = "Šidák-adjusted min p over (mutation, configuration)";
   all.alpha = kFamilyAlpha;
-  bool ok = true, every_rejected = true, any_tested = false;
+  bool ok = true, every_rejected = true, any_tested = false, every_covered = true;
   double p_min = 1.0;
   std::string msg;
   nlohmann::json per = nlohmann::json::object();
@@ -579,6 +579,7 @@ CheckResult path_registered_mutations_chi2(const CheckContext& ctx, const std::s
     const bool tested = e.status == "tested";
     const bool passed = e.status == "exempt" || (tested && !rejected);
     ok = ok && passed;
+    every_covered = every_covered && (tested || e.status == "exempt");
     if (tested) {
       any_tested = true;
       every_rejected = every_rejected && rejected;
@@ -601,6 +602,9 @@ CheckResult path_registered_mutations_chi2(const CheckContext& ctx, const std::s
   all.details["alpha_per_test"] = a;
   all.details["tests"] = static_cast<int64_t>(tests.size());
   all.details["every_tested_rejected"] = any_tested && every_rejected;
+  // Every registered mutation tested (or exempt with its reason): a control that rejects only
+  // the mutations it reached must not count as caught when one was not reached.
+  all.details["every_registered_covered"] = every_covered;
   return all;
 }
 
