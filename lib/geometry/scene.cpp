@@ -227,16 +227,8 @@ const Scene::Entry* trace_nearest(void* scene, const std::vector<std::unique_ptr
 }  // namespace
 
 std::optional<Hit> Scene::intersect(const Ray& ray, double tmax) const {
-  if (!committed_) throw std::logic_error("Scene::intersect before commit");
-  QueryContext ctx;
-  RTCRayHit rh;
-  const Entry* e = trace_nearest(scene_, entries_, ray, tmax, &ctx, &rh);
-  if (!e) return std::nullopt;
-  const auto* m = std::get_if<TriangleMesh>(&e->shape);
-  if (!m) return ctx.analytic_hit;
-  std::optional<Hit> h(std::in_place);  // filled in place: no copy of the Hit
-  m->refine_hit(rh.hit.primID, ray, rh.ray.tfar, Vec2(rh.hit.u, rh.hit.v), &*h);
-  h->shape_id = e->id;
+  std::optional<Hit> h(std::in_place);  // filled in place by the query below: no copy of the Hit
+  if (!intersect(ray, &*h, tmax)) return std::nullopt;
   return h;
 }
 
