@@ -98,7 +98,7 @@ void write_check_report(const nlohmann::json& results, const std::string& out_di
                    fmt_num(cfg.value("seed", nlohmann::json())), cfg.value("full", false) ? "full" : "quick",
                    cfg.value("attempt", 0) > 0 ? fmt::format(" &middot; attempt {}", cfg.value("attempt", 0)) : "");
   h << "<p>Statistical checks that reject are rerun once with a fresh seed and 4&times; the samples; they fail only "
-       "if the rerun rejects too (both results are shown). &alpha; is the level after the check's own multiple-comparison "
+       "if the rerun rejects too, at 0.05 &alpha; where its rejection is by its p-value (both results are shown). &alpha; is the level after the check's own multiple-comparison "
        "correction. MDE is the smallest effect the check rejects with 90% power at that &alpha; and its sample "
        "size (hover for which effect; &mdash;: not stated).</p>\n";
   h << "<table><tr><th>check</th><th>verdict</th><th>statistic</th><th>value</th><th>p</th><th>&alpha;</th>"
