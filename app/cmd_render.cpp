@@ -1,7 +1,9 @@
 #include "app/cmd_render.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -10,6 +12,7 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include "app/mpi_world.h"
 #include "app/progress.h"
 #include "app/scene_loading.h"
 #include "lib/core/atomic_file.h"
@@ -21,6 +24,46 @@
 #include "lib/scene/scene_loader.h"
 
 namespace tb {
+namespace {
+
+// Under mpirun (docs/checks-and-reports.md, "tb render under mpirun"): rank r of n renders the
+// passes [P r / n, P (r + 1) / n) of the P passes (path-space MLT: chains) and keeps each pass's
+// Welch samples as its film closes it; rank 0 adds the other ranks' passes, in rank and pass order,
+// to its own film's sums. Every pass is a pure function of (seed, pass index) and the sums are
+// accumulated in pass order exactly as one process does, so the image is bit-identical to a
+// one-process run. A rank's message: an 8-byte length, a JSON header (counts, mutation reports),
+// then its passes as raw doubles (pixels x 3 per pass).
+struct RankPart {
+  nlohmann::json header;
+  std::vector<double> passes;  // pass-major, pixel-major, RGB
+};
+
+std::string pack_part(const nlohmann::json& header, const std::vector<double>& passes) {
+  const std::string h = header.dump();
+  const uint64_t n = h.size();
+  std::string out(sizeof n, '\0');
+  std::memcpy(out.data(), &n, sizeof n);
+  out += h;
+  const size_t at = out.size();
+  out.resize(at + passes.size() * sizeof(double));
+  if (!passes.empty()) std::memcpy(out.data() + at, passes.data(), passes.size() * sizeof(double));
+  return out;
+}
+
+RankPart unpack_part(const std::string& s) {
+  uint64_t n = 0;
+  if (s.size() < sizeof n) throw std::runtime_error("tb render under mpirun: truncated message from a rank");
+  std::memcpy(&n, s.data(), sizeof n);
+  if (s.size() < sizeof n + n || (s.size() - sizeof n - n) % sizeof(double) != 0)
+    throw std::runtime_error("tb render under mpirun: malformed message from a rank");
+  RankPart p;
+  p.header = nlohmann::json::parse(s.substr(sizeof n, n));
+  p.passes.resize((s.size() - sizeof n - n) / sizeof(double));
+  if (!p.passes.empty()) std::memcpy(p.passes.data(), s.data() + sizeof n + n, p.passes.size() * sizeof(double));
+  return p;
+}
+
+}  // namespace
 
 int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   if (a.list) {
@@ -66,6 +109,14 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     fmt::print(stderr, "tb render: --partition applies to the ramlt-* integrators only\n");
     return 2;
   }
+  const mpi::World& mw = mpi::world();
+  const bool distributed = mw.size > 1;
+  if (distributed && a.time_s > 0) {
+    if (mw.rank == 0)
+      fmt::print(stderr, "tb render: --time is refused under mpirun (a time budget makes the passes each rank "
+                         "renders depend on its speed); give --spp and --passes\n");
+    return 2;
+  }
   const auto t_load = std::chrono::steady_clock::now();
   std::unique_ptr<World> world = load_scene_file(a.scene, a.resolution);
   const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count();
@@ -82,7 +133,7 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
                                 : default_pass_spp(a.integrator, world->camera().width() * world->camera().height());
     st.spp = st.passes * n;
   }
-  ProgressLine line(!a.no_progress && isatty(STDERR_FILENO));
+  ProgressLine line(!a.no_progress && isatty(STDERR_FILENO) && mw.rank == 0);
   line.start(fmt::format("{} {}", a.integrator, std::filesystem::path(a.scene).filename().string()));
   const auto t_start = std::chrono::steady_clock::now();
   st.progress = [&](double f) {
@@ -94,6 +145,26 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
 
   ThreadLimit limit(static_cast<size_t>(std::max(0, a.threads)));
   Film film(world->camera().width(), world->camera().height());
+  // Under mpirun: this rank's range of the passes, and (ranks > 0) its closed passes kept for rank 0.
+  std::vector<double> my_passes;
+  if (distributed) {
+    const int64_t P = std::max<int64_t>(1, st.passes);
+    st.first_pass = P * mw.rank / mw.size;
+    st.pass_count = P * (mw.rank + 1) / mw.size - st.first_pass;
+    const double bytes = static_cast<double>((P + mw.size - 1) / mw.size) * static_cast<double>(film.pixel_count()) * 24.0;
+    if (bytes > 1.5e9) {
+      if (mw.rank == 0)
+        fmt::print(stderr, "tb render under mpirun: {:.3g} GB of pass images per rank exceeds the 1.5 GB a message "
+                           "may hold; use fewer passes or more ranks\n", bytes / 1e9);
+      return 2;
+    }
+    if (mw.rank != 0) {
+      my_passes.reserve(static_cast<size_t>(st.pass_count * film.pixel_count() * 3));
+      film.set_pass_observer([&](const std::vector<Rgb>& pass) {
+        for (const Rgb& v : pass) my_passes.insert(my_passes.end(), {v[0], v[1], v[2]});
+      });
+    }
+  }
   const auto t0 = std::chrono::steady_clock::now();
   // ramlt-*: the driver directly, for the partition option and the per-region maps.
   std::optional<path_space::RamltRegionMaps> ramlt_maps;
@@ -112,13 +183,56 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   } else {
     passes = integ->render(*world, st, film);
   }
+  WelchImage welch = film.welch();
+  int64_t nonfinite = film.nonfinite().count();
+  if (distributed) {
+    nlohmann::json h = {{"passes", passes}, {"nonfinite", nonfinite}, {"mutations_total", report.mutations_total}};
+    h["mutations"] = nlohmann::json::array();
+    for (const auto& m : report.mutations) h["mutations"].push_back({m.name, m.proposed, m.accepted, m.errors});
+    const std::vector<std::string> parts = mpi::gather(pack_part(h, my_passes));
+    if (mw.rank != 0) return mpi::broadcast(0);
+    try {
+      const size_t px = welch.pixels();
+      for (size_t r = 1; r < parts.size(); ++r) {
+        const RankPart part = unpack_part(parts[r]);
+        const int64_t n = part.header.at("passes").get<int64_t>();
+        if (part.passes.size() != static_cast<size_t>(n) * px * 3)
+          throw std::runtime_error(fmt::format("tb render under mpirun: rank {} sent {} values for {} passes", r,
+                                               part.passes.size(), n));
+        for (int64_t j = 0; j < n; ++j)  // in pass order, as one process adds them
+          for (size_t i = 0; i < px; ++i) {
+            const double* v = part.passes.data() + (static_cast<size_t>(j) * px + i) * 3;
+            welch.add(i, Rgb(v[0], v[1], v[2]));
+          }
+        passes += n;
+        nonfinite += part.header.at("nonfinite").get<int64_t>();
+        report.mutations_total += part.header.at("mutations_total").get<int64_t>();
+        for (const auto& m : part.header.at("mutations")) {
+          const std::string name = m.at(0).get<std::string>();
+          auto it = std::find_if(report.mutations.begin(), report.mutations.end(),
+                                 [&](const MutationReport& x) { return x.name == name; });
+          if (it == report.mutations.end()) it = report.mutations.insert(report.mutations.end(), MutationReport{name});
+          it->proposed += m.at(1).get<int64_t>();
+          it->accepted += m.at(2).get<int64_t>();
+          it->errors += m.at(3).get<int64_t>();
+        }
+      }
+    } catch (...) {
+      mpi::broadcast(1);
+      throw;
+    }
+  }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (distributed && report.mutations_total > 0)
+    report.mutations_per_second = static_cast<double>(report.mutations_total) / seconds;
   line.finish();
 
-  const ExrImage img = exr_image_from_welch(film.welch());
+  const ExrImage img = exr_image_from_welch(welch);
   write_exr(a.out, img);
   const std::string png = std::filesystem::path(a.out).replace_extension(".png").string();
-  write_png_preview(png, film.width(), film.height(), film.mean_image(), 0.0);
+  std::vector<Rgb> mean(welch.pixels());
+  for (size_t i = 0; i < mean.size(); ++i) mean[i] = welch.mean(i);
+  write_png_preview(png, film.width(), film.height(), mean, 0.0);
   const int64_t spp_done = passes * std::max<int64_t>(1, st.spp / std::max<int64_t>(1, st.passes));
   nlohmann::json rec = {{"scene", a.scene},
                         {"integrator", a.integrator},
@@ -130,7 +244,8 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
                         {"spp", spp_done},
                         {"seconds", seconds},
                         {"load_seconds", load_s},
-                        {"nonfinite_samples", film.nonfinite().count()},
+                        {"nonfinite_samples", nonfinite},
+                        {"mpi_ranks", mw.size},
                         {"interrupted", interrupted && interrupted->load()},
                         {"scene_description", world->description()}};
   if (!report.mutations.empty()) {
@@ -153,8 +268,7 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   write_file_atomic(std::filesystem::path(a.out).replace_extension(".json").string(), rec.dump(1));
   fmt::print("{}: {}x{}, {} passes, {} spp in {:.2f} s ({:.3g} samples/s); {} non-finite samples rejected\n", a.out,
              film.width(), film.height(), passes, spp_done, seconds,
-             static_cast<double>(spp_done) * static_cast<double>(film.pixel_count()) / seconds,
-             film.nonfinite().count());
+             static_cast<double>(spp_done) * static_cast<double>(film.pixel_count()) / seconds, nonfinite);
   if (!report.mutations.empty()) {
     fmt::print("{} mutations, {:.3g} mutations/s; acceptance:", report.mutations_total, report.mutations_per_second);
     int64_t errors = 0;
@@ -170,7 +284,10 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   if (film.nonfinite().count() > 0)
     fmt::print("{} (replay: tb render {} --integrator {} --seed {})\n", film.nonfinite().summary(), a.scene,
                a.integrator, a.seed);
-  return 0;
+  if (nonfinite > film.nonfinite().count())
+    fmt::print("{} more non-finite samples rejected on the other ranks\n", nonfinite - film.nonfinite().count());
+  if (distributed) fmt::print("{} ranks under mpirun\n", mw.size);
+  return mpi::broadcast(0);
 }
 
 }  // namespace tb
