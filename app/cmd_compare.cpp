@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cctype>
 #include <filesystem>
+#include <fstream>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -11,6 +13,7 @@
 #include "lib/film/exr_io.h"
 #include "lib/film/pfm_io.h"
 #include "validate/image_compare.h"
+#include "validate/pass_tile_compare.h"
 
 namespace tb {
 
@@ -61,6 +64,23 @@ WelchImage load_reference(const std::string& mean_path, const std::string& varia
     throw std::invalid_argument(fmt::format("--reference-mean {} is {} x {}, --reference-variance {} is {} x {}",
                                             mean_path, m.width, m.height, variance_path, v.width, v.height));
   return welch_from_reference(m.width, m.height, m.rgb, v.rgb);
+}
+
+// tb render's side files of an EXR: OUT.tiles.json (per-pass tile sums) and OUT.json (the record).
+std::string side_file(const std::string& exr, const char* ext) {
+  return std::filesystem::path(exr).replace_extension(ext).string();
+}
+
+// Whether the record next to an EXR says its pixels are dependent within a pass (MCMC renders).
+bool record_says_dependent(const std::string& exr) {
+  std::ifstream in(side_file(exr, ".json"));
+  if (!in) return false;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(in);
+    return j.value("pixels_dependent_within_pass", false);
+  } catch (const std::exception&) {
+    return false;
+  }
 }
 
 int compare_images(const CompareArgs& a) {
@@ -179,18 +199,50 @@ int compare_images(const CompareArgs& a) {
       bins += fmt::format("{}{:.0f}% [{:.3g}, {:.3g}]", bins.empty() ? "" : ", ", 100.0 * b.share, b.lo, b.hi);
     fmt::print("  relMSE by reference brightness, fifths of the pixels dark to bright: {}\n", bins);
   }
-  fmt::print("{} (combined p = {:.4g})\n", r.rejects() ? "DIFFERENT" : "consistent", r.p_value());
+  // The pass-tile test (validate/pass_tile_compare.h) when both renders carry their per-pass tile
+  // sums; it decides when either render's pixels are dependent within a pass (MCMC).
+  std::optional<PassTileCompareResult> pt;
+  const bool dependent = is_exr(a.inputs[0]) && (record_says_dependent(a.inputs[0]) ||
+                                                 (!reference_form && is_exr(a.inputs[1]) && record_says_dependent(a.inputs[1])));
+  if (!reference_form && is_exr(a.inputs[0]) && is_exr(a.inputs[1]) &&
+      std::filesystem::exists(side_file(a.inputs[0], ".tiles.json")) &&
+      std::filesystem::exists(side_file(a.inputs[1], ".tiles.json"))) {
+    pt = compare_pass_tiles(PassTiles::read(side_file(a.inputs[0], ".tiles.json")),
+                            PassTiles::read(side_file(a.inputs[1], ".tiles.json")), a.alpha);
+    fmt::print("pass-tile test ({}x{} tiles, {} and {} passes; Welch over the passes per tile-channel and per channel "
+               "total, Bonferroni over {}, valid whatever the dependence within a pass): p = {:.4g}{}\n",
+               pt->grid_x, pt->grid_y, pt->passes_a, pt->passes_b, pt->tested, pt->p_family,
+               pt->rejects() ? "  REJECTS" : "");
+    fmt::print("  worst {} {}: A {:.6g}, B {:.6g} ({:+.3g}), t = {:.4g}, dof {:.4g}; totals A / B - 1: R {:+.3g}, "
+               "G {:+.3g}, B {:+.3g}\n",
+               pt->worst_tile < 0 ? std::string("image total") : fmt::format("tile {}", pt->worst_tile),
+               ch(pt->worst_channel), pt->worst_mean_a, pt->worst_mean_b, pt->worst_rel_diff, pt->worst_t, pt->worst_dof,
+               pt->total_rel_diff[0], pt->total_rel_diff[1], pt->total_rel_diff[2]);
+  }
+  const bool by_tiles = dependent && pt.has_value();
+  if (dependent && !pt)
+    fmt::print("warning: a render's pixels are dependent within a pass (MCMC) and the pass-tile files "
+               "(OUT.tiles.json) are missing: the per-pixel verdict below can reject consistent renders\n");
+  const bool rejects = by_tiles ? pt->rejects() : r.rejects();
+  fmt::print("{} ({})\n", rejects ? "DIFFERENT" : "consistent",
+             by_tiles ? fmt::format("pass-tile test, p = {:.4g}: pixels are dependent within a pass; the pixel-wise "
+                                    "combined p = {:.4g} is for information",
+                                    pt->p_family, r.p_value())
+                      : fmt::format("combined p = {:.4g}", r.p_value()));
   if (!a.json_out.empty()) {
     nlohmann::json j = r.details();
+    if (pt) j["pass_tiles"] = pt->details();
+    j["verdict_from"] = by_tiles ? "pass_tiles" : "pixels";
     j["a"] = a.inputs[0];
     j["b"] = reference_form ? nlohmann::json{{"reference_mean", a.reference_mean},
                                              {"reference_variance", a.reference_variance},
                                              {"effective_count", kReferenceEffectiveCount}}
                             : nlohmann::json(a.inputs[1]);
-    j["rejects"] = r.rejects();
+    j["rejects"] = rejects;
+    j["rejects_pixels"] = r.rejects();
     write_file_atomic(a.json_out, j.dump(1));
   }
-  return r.rejects() ? 1 : 0;
+  return rejects ? 1 : 0;
 }
 
 }  // namespace

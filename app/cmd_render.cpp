@@ -18,6 +18,7 @@
 #include "lib/core/atomic_file.h"
 #include "lib/core/parallel.h"
 #include "lib/film/exr_io.h"
+#include "lib/film/pass_tiles.h"
 #include "lib/film/png_preview.h"
 #include "lib/mcmc/path_space/ramlt.h"
 #include "lib/registry/integrator_registry.h"
@@ -158,13 +159,15 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
                            "may hold; use fewer passes or more ranks\n", bytes / 1e9);
       return 2;
     }
-    if (mw.rank != 0) {
-      my_passes.reserve(static_cast<size_t>(st.pass_count * film.pixel_count() * 3));
-      film.set_pass_observer([&](const std::vector<Rgb>& pass) {
-        for (const Rgb& v : pass) my_passes.insert(my_passes.end(), {v[0], v[1], v[2]});
-      });
-    }
+    if (mw.rank != 0) my_passes.reserve(static_cast<size_t>(st.pass_count * film.pixel_count() * 3));
   }
+  // Per-pass tile sums for tb compare's pass-tile test (lib/film/pass_tiles.h), in pass order.
+  PassTiles tiles(film.width(), film.height());
+  film.set_pass_observer([&](const std::vector<Rgb>& pass) {
+    tiles.add_pass(pass);
+    if (distributed && mw.rank != 0)
+      for (const Rgb& v : pass) my_passes.insert(my_passes.end(), {v[0], v[1], v[2]});
+  });
   const auto t0 = std::chrono::steady_clock::now();
   // ramlt-*: the driver directly, for the partition option and the per-region maps.
   std::optional<path_space::RamltRegionMaps> ramlt_maps;
@@ -199,11 +202,15 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
         if (part.passes.size() != static_cast<size_t>(n) * px * 3)
           throw std::runtime_error(fmt::format("tb render under mpirun: rank {} sent {} values for {} passes", r,
                                                part.passes.size(), n));
-        for (int64_t j = 0; j < n; ++j)  // in pass order, as one process adds them
+        std::vector<Rgb> pass(px);
+        for (int64_t j = 0; j < n; ++j) {  // in pass order, as one process adds them
           for (size_t i = 0; i < px; ++i) {
             const double* v = part.passes.data() + (static_cast<size_t>(j) * px + i) * 3;
-            welch.add(i, Rgb(v[0], v[1], v[2]));
+            pass[i] = Rgb(v[0], v[1], v[2]);
+            welch.add(i, pass[i]);
           }
+          tiles.add_pass(pass);
+        }
         passes += n;
         nonfinite += part.header.at("nonfinite").get<int64_t>();
         report.mutations_total += part.header.at("mutations_total").get<int64_t>();
@@ -233,6 +240,8 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   std::vector<Rgb> mean(welch.pixels());
   for (size_t i = 0; i < mean.size(); ++i) mean[i] = welch.mean(i);
   write_png_preview(png, film.width(), film.height(), mean, 0.0);
+  const std::string tiles_path = std::filesystem::path(a.out).replace_extension(".tiles.json").string();
+  write_file_atomic(tiles_path, tiles.to_json());
   const int64_t spp_done = passes * std::max<int64_t>(1, st.spp / std::max<int64_t>(1, st.passes));
   nlohmann::json rec = {{"scene", a.scene},
                         {"integrator", a.integrator},
@@ -246,6 +255,10 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
                         {"load_seconds", load_s},
                         {"nonfinite_samples", nonfinite},
                         {"mpi_ranks", mw.size},
+                        {"pass_tiles", tiles_path},
+                        // MCMC: one chain's splats spread over the image, so pixels of a pass are dependent
+                        // and tb compare decides on the pass-tile test (docs/compare.md).
+                        {"pixels_dependent_within_pass", !report.mutations.empty() || ramlt},
                         {"interrupted", interrupted && interrupted->load()},
                         {"scene_description", world->description()}};
   if (!report.mutations.empty()) {
