@@ -133,8 +133,8 @@ int compare_images(const CompareArgs& a) {
   fmt::print("  validity: Welch samples (passes) independent; pixels independent within a pass (sum of variances). "
              "Splatting (lt, bdpt t = 1) correlates pixels within a pass positively and a PSS MLT pass shares one "
              "normalisation over all pixels: there Var(D) is underestimated. Measured false-alarm rates of the tiled test at alpha 0.01 "
-             "(Cornell box 24x24, docs/statistics.md): pt 0.010, lt 0.005, bdpt 0.013, pssmlt 0.075 (above alpha: "
-             "read a PSS MLT verdict with that in mind)\n");
+             "(Cornell box 24x24, docs/statistics.md): pt 0.010, lt 0.005, bdpt 0.013, pssmlt 0.075 (above alpha; "
+             "renders whose record says their pixels are dependent (MCMC) are decided by the pass-tile test below)\n");
   fmt::print("alpha {:g} (each of 3 tests {:.3g}, per {} {:.3g}); {} {}s tested, {} identical "
              "skipped\n",
              r.alpha, r.alpha_each, unit, r.alpha_pixel, r.tested, unit, r.skipped_identical);
@@ -210,8 +210,8 @@ int compare_images(const CompareArgs& a) {
     pt = compare_pass_tiles(PassTiles::read(side_file(a.inputs[0], ".tiles.json")),
                             PassTiles::read(side_file(a.inputs[1], ".tiles.json")), a.alpha);
     fmt::print("pass-tile test ({}x{} tiles, {} and {} passes; Welch over the passes per tile-channel and per channel "
-               "total, Bonferroni over {}, valid whatever the dependence within a pass): p = {:.4g}{}\n",
-               pt->grid_x, pt->grid_y, pt->passes_a, pt->passes_b, pt->tested, pt->p_family,
+               "total, weighted Bonferroni: alpha/2 over {} totals, alpha/2 over {} tile-channels; valid whatever the dependence within a pass): p = {:.4g}{}\n",
+               pt->grid_x, pt->grid_y, pt->passes_a, pt->passes_b, pt->tested_totals, pt->tested_tiles, pt->p_family,
                pt->rejects() ? "  REJECTS" : "");
     fmt::print("  worst {} {}: A {:.6g}, B {:.6g} ({:+.3g}), t = {:.4g}, dof {:.4g}; totals A / B - 1: R {:+.3g}, "
                "G {:+.3g}, B {:+.3g}\n",

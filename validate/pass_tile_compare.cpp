@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include "validate/stats/tests.h"
 #include "validate/stats/welford.h"
@@ -38,11 +40,13 @@ Stat welch_over_passes(int64_t na, int64_t nb, A&& a_value, B&& b_value) {
 }  // namespace
 
 nlohmann::json PassTileCompareResult::details() const {
-  return {{"test", "pass-tile Welch, Bonferroni over tile-channels and channel totals"},
+  return {{"test", "pass-tile Welch; weighted Bonferroni: alpha/2 over the channel totals, alpha/2 over the tile-channels"},
           {"alpha", alpha},
           {"passes", {passes_a, passes_b}},
           {"grid", {grid_x, grid_y}},
           {"tested", tested},
+          {"tested_tiles", tested_tiles},
+          {"tested_totals", tested_totals},
           {"skipped", skipped},
           {"p_min", p_min},
           {"p_family", p_family},
@@ -65,12 +69,14 @@ PassTileCompareResult compare_pass_tiles(const PassTiles& a, const PassTiles& b,
   r.passes_b = b.passes();
   r.grid_x = a.grid_x();
   r.grid_y = a.grid_y();
+  std::vector<std::pair<int, double>> tested_p;  // (tile, -1 for a total; p)
   auto consider = [&](const Stat& s, int tile, int c) {
     if (!s.tested) {
       ++r.skipped;
       return;
     }
     ++r.tested;
+    tested_p.emplace_back(tile, s.t.p_value);
     if (s.t.p_value < r.p_min || r.worst_channel < 0) {
       r.p_min = std::min(r.p_min, s.t.p_value);
       r.worst_tile = tile;
@@ -103,7 +109,25 @@ PassTileCompareResult compare_pass_tiles(const PassTiles& a, const PassTiles& b,
     r.total_rel_diff[c] = s.mean_b != 0.0 ? (s.mean_a - s.mean_b) / std::abs(s.mean_b) : 0.0;
     consider(s, -1, c);
   }
-  r.p_family = r.tested > 0 ? std::min(1.0, static_cast<double>(r.tested) * r.p_min) : 1.0;
+  // Weighted Bonferroni: half of alpha for the (at most 3) channel totals, half for the tiles, each
+  // half split evenly; valid under any dependence. The totals carry the most common MCMC failure (a
+  // wrong normalisation scales every pixel) and would drown among 195 equal shares.
+  double p_tiles = 1.0, p_totals = 1.0;
+  int64_t n_tiles = 0, n_totals = 0;
+  for (const auto& [tile, p] : tested_p) {
+    if (tile < 0) {
+      ++n_totals;
+      p_totals = std::min(p_totals, p);
+    } else {
+      ++n_tiles;
+      p_tiles = std::min(p_tiles, p);
+    }
+  }
+  const double share_tiles = n_totals > 0 ? 2.0 : 1.0, share_totals = n_tiles > 0 ? 2.0 : 1.0;
+  r.p_family = std::min({1.0, n_tiles > 0 ? share_tiles * static_cast<double>(n_tiles) * p_tiles : 1.0,
+                         n_totals > 0 ? share_totals * static_cast<double>(n_totals) * p_totals : 1.0});
+  r.tested_tiles = n_tiles;
+  r.tested_totals = n_totals;
   return r;
 }
 
