@@ -113,6 +113,14 @@ struct Point {
   std::vector<double> replicate_rrmse;
   bool finite = true;
   double mutations_per_second() const { return static_cast<double>(mutations) / seconds; }
+  // Median of the replicates' rRMSE (robust to the single heavy-tailed replicates of glossy scenes).
+  double median_rrmse() const {
+    std::vector<double> v = replicate_rrmse;
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    const size_t m = v.size() / 2;
+    return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+  }
 };
 
 // `reps` replicates of run_ramlt with options `o` on the scene: `chains` chains (passes), `mpp`
