@@ -11,6 +11,7 @@
 // different cells of a two-cell grid, so that no single scale suits both.
 #pragma once
 
+#include <cmath>
 #include <memory>
 #include <optional>
 #include <string>
@@ -71,5 +72,24 @@ inline GaussianMixtureTarget<1> two_scale_1d() {
   return GaussianMixtureTarget<1>({{0.5, {-2.0}, {0.25}}, {0.5, {5.0}, {2.0}}}, GridBins<1>({-4.0}, {11.0}, 60));
 }
 inline PartitionBox<1> two_scale_box() { return {{-8.0}, {8.0}, {2}}; }
+
+// A unimodal two-scale target on R: pi(x) proportional to exp(-x^2 / (2 s(x)^2)), s = 0.25 for x < 0
+// and 2 for x >= 0 (a "split normal": continuous at 0, masses 1/9 and 8/9). The two cells of
+// two_scale_box() hold one scale each and a chain crosses between them at every scale, so the ESS
+// of x measures the local moves, not mode crossings as on two_scale_1d().
+struct SplitNormalTarget {
+  using State = Point<1>;
+  static constexpr double kLeft = 0.25, kRight = 2.0;
+  double density(const State& x) const {
+    const double s = x[0] < 0.0 ? kLeft : kRight;
+    return std::exp(-0.5 * x[0] * x[0] / (s * s));
+  }
+  State sample_exact(Uniforms& u) const {
+    const bool left = u.next() < kLeft / (kLeft + kRight);
+    const double z = std::abs(standard_normal(u));
+    return {left ? -kLeft * z : kRight * z};
+  }
+  double summary(const State& x) const { return x[0]; }
+};
 
 }  // namespace tb::mcmc

@@ -18,11 +18,9 @@
 #include <fmt/format.h>
 
 #include "lib/core/hash.h"
-#include "lib/core/spectrum.h"
-#include "lib/integrator/bdpt.h"
 #include "lib/mcmc/path_space/ramlt.h"
 #include "validate/experiment.h"
-#include "validate/render/render_compare.h"
+#include "validate/experiments/ramlt_experiment_common.h"
 #include "validate/stats/convergence_fit.h"
 
 namespace tb {
@@ -61,16 +59,7 @@ ExperimentReport run(const ExperimentContext& ctx) {
   const size_t total = cases.size() * variants.size() * mpp.size();
   size_t done = 0;
   for (const SceneCase& sc : cases) {
-    const std::unique_ptr<World> world = load_scene_at_resolution(sc.file, res, res);
-    const int max_depth = std::min(8, world->integrator_defaults().value("max_depth", 8));
-    Film ref(res, res);
-    RenderSettings rs;
-    rs.spp = ref_spp;
-    rs.passes = 16;
-    rs.max_depth = max_depth;
-    rs.seed = hash_values(ctx.seed, hash_string("ramlt-fig10.ref." + sc.file));
-    render_bdpt(*world, rs, ref);
-    const std::vector<Rgb> ref_img = ref.mean_image();
+    const ramlt_exp::SceneSetup scene = ramlt_exp::load_scene_with_reference(sc.file, res, ref_spp, ctx.seed);
     const bool multi = sc.perturbation == RamltPerturbation::kMultiChain;
     const std::string pert = multi ? "multi-chain" : "lens";
     PlotSpec plot;
@@ -98,24 +87,12 @@ ExperimentReport run(const ExperimentContext& ctx) {
         const int64_t mutations = mpp[i] * res * res;
         o.refine_every = std::max<int64_t>(1, mutations / 8);  // about 8 refinements per run
         o.split_threshold = 200;
-        // `reps` independent replicates: rRMSE = sqrt(mean of the replicates' rRMSE^2), T their mean time.
-        double e2 = 0.0, t = 0.0;
-        path_space::RamltStats r;
-        for (int rep_i = 0; rep_i < reps; ++rep_i) {
-          RenderSettings st;
-          st.passes = chains;
-          st.spp = mpp[i];
-          st.max_depth = max_depth;
-          st.seed = hash_values(ctx.seed, hash_string("ramlt-fig10." + sc.file + "." + part), i, rep_i);
-          Film film(res, res);
-          r = path_space::run_ramlt(*world, st, film, o);
-          const double ei = luminance_rrmse(film.mean_image(), ref_img);
-          ok = ok && std::isfinite(ei);
-          e2 += ei * ei / reps;
-          t += std::max(1e-6, r.mlt.seconds) / reps;
-        }
-        const double e = std::sqrt(e2);
-        ok = ok && std::isfinite(e) && e > 0.0;
+        const ramlt_exp::Point p = ramlt_exp::measure(scene, o, chains, mpp[i], reps, [&](int rep_i) {
+          return hash_values(ctx.seed, hash_string("ramlt-fig10." + sc.file + "." + part), i, rep_i);
+        });
+        const double e = p.rrmse, t = p.seconds;
+        ok = ok && p.finite;
+        acc = p.acceptance;
         s.x.push_back(t);
         s.y.push_back(e);
         stats::ConvergencePoint cp;
@@ -124,11 +101,9 @@ ExperimentReport run(const ExperimentContext& ctx) {
         cp.replicates = reps;
         cp.seconds = t;
         pts.push_back(cp);
-        for (const auto& m : r.mlt.mutations)
-          if (m.name.rfind("ramlt", 0) == 0) acc = m.acceptance_rate();
         data.push_back({{"scene", sc.file}, {"perturbation", pert}, {"variant", label}, {"partition", part},
-                        {"mutations", mutations}, {"seconds", t}, {"rrmse", e}, {"regions", r.maps.regions},
-                        {"regions2", r.maps.regions2}, {"acceptance", acc}});
+                        {"mutations", mutations}, {"seconds", t}, {"rrmse", e}, {"regions", p.regions},
+                        {"regions2", p.regions2}, {"acceptance", acc}});
         ctx.progress(static_cast<double>(++done) / static_cast<double>(total));
       }
       const stats::PowerLawFit f = stats::fit_time_power_law(pts);
@@ -160,7 +135,7 @@ ExperimentReport run(const ExperimentContext& ctx) {
       "(RA-GRID = grid4d, RA-QUADTREE = quadtree4d). {} x {} images, {} chains, {} to {} mutations per pixel "
       "(doubling; {} replicates per point, rRMSE their root mean square), grid N_top = N_bottom = {}, quadtree refined every 1/8 of the run above "
       "200 reports (Otsu's M_split = 5000, M_refine = 10^7 suit 10-minute renders, not these). Reference: BDPT "
-      "{} spp, whose own noise is a floor under every rRMSE. Passes when every run is finite and every fit converged; "
+      "{} spp (cached on disk, reports/cache), whose own noise is a floor under every rRMSE. Passes when every run is finite and every fit converged; "
       "the claims list what was observed.",
       res, res, chains, mpp.front(), mpp.back(), reps, grid, ref_spp);
   rep.data = {{"runs", data},       {"resolution", res}, {"chains", chains},

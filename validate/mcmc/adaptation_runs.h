@@ -98,13 +98,13 @@ struct AdaptationRun {
   }
 };
 
-template <class Update = OtsuSignUpdate>
-AdaptationRun<Update> run_two_scale_adaptation(const std::string& partition, AdaptationOptions o, int chains,
-                                               int batches, int steps, uint64_t seed, uint64_t key) {
+// The same on any 1d target with exact draws (sample_exact), over the cells of two_scale_box().
+template <class Update = OtsuSignUpdate, class Tg>
+AdaptationRun<Update> run_regional_adaptation(const Tg& target, const std::string& partition, AdaptationOptions o,
+                                              int chains, int batches, int steps, uint64_t seed, uint64_t key) {
   AdaptationRun<Update> run;
   run.partition = make_partition<1>(partition, two_scale_box());
   run.adapter = std::make_unique<RegionalAdaptation<Update>>(run.partition->regions(), o, true);
-  const auto target = two_scale_1d();
   const auto kernel = regional_adaptive_kernel<1>(target, run.partition, run.adapter.get());
   std::vector<Point<1>> starts(chains);
   for (int c = 0; c < chains; ++c) {
@@ -121,6 +121,12 @@ AdaptationRun<Update> run_two_scale_adaptation(const std::string& partition, Ada
   }
   run.states = ch.states();
   return run;
+}
+
+template <class Update = OtsuSignUpdate>
+AdaptationRun<Update> run_two_scale_adaptation(const std::string& partition, AdaptationOptions o, int chains,
+                                               int batches, int steps, uint64_t seed, uint64_t key) {
+  return run_regional_adaptation<Update>(two_scale_1d(), partition, o, chains, batches, steps, seed, key);
 }
 
 // Per-region acceptance at frozen lambda: `chains` chains continued from `starts`, `steps` each.
