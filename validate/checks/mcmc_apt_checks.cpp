@@ -5,10 +5,10 @@
 //    on seeded pairs, x a uniform state with f(x) > 0 where one is found within kStartTries draws;
 //  * mcmc.apt.negative_control.symmetric_assumption.pairwise: the same kernel with T(x -> y) used
 //    for both directions (ForwardDensityBothWays, validate/mcmc/apt_broken.h) must violate balance;
-//  * mcmc.apt.cornell.chi2: the 1D marginals of the film coordinate and of the first bounce's
-//    first direction uniform (d = y_i - x_i wrapped, + 1/2) at three states against the stated
-//    density's factor for that coordinate (T is their product), 401 cells, alpha 1e-5 Šidák over
-//    the six tests; negative control: the factor stated with sigma 5 % too wide (MisstatedAptFactor).
+//  * mcmc.apt.cornell.chi2: the 1D marginals of the film coordinate, of the first bounce's first
+//    direction uniform and of its lobe uniform (d = y_i - x_i wrapped, in cells of atan(d / sigma))
+//    at three states against the stated density's factor for that coordinate (T is their
+//    product), 401 cells, alpha 1e-5 Šidák over the nine tests; negative control: the factor stated with sigma 5 % too wide (MisstatedAptFactor).
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -19,6 +19,7 @@
 #include "estimators/mcmc/metropolis_hastings.h"
 #include "estimators/mcmc/proposal_mixture.h"
 #include "lib/core/hash.h"
+#include "lib/core/math.h"
 #include "lib/core/rng.h"
 #include "lib/mcmc/apt_small_step.h"
 #include "validate/chi2/sampler_chi2.h"
@@ -109,8 +110,8 @@ CheckResult apt_chi2(const CheckContext& ctx, const Factor& factor, bool broken,
     AptState x = start_state(target, su);
     if (target.density(x) > 0.0) xs.push_back(std::move(x));
   }
-  const size_t coords[2] = {0, 2};
-  const int tests = 2 * static_cast<int>(xs.size());
+  const size_t coords[3] = {0, 2, 4};
+  const int tests = 3 * static_cast<int>(xs.size());
   const double a = stats::sidak_alpha(kChi2Alpha, std::max(1, tests));
   CheckResult res;
   res.statistic_name = "smallest p";
@@ -122,14 +123,22 @@ CheckResult apt_chi2(const CheckContext& ctx, const Factor& factor, bool broken,
     const AptState& x0 = xs[c];
     const AptScales sx = target.scales(x0);
     for (size_t i : coords) {
+      // Cells in v = 1/2 + atan(d / c) / pi, d = y_i - x_i wrapped to [-1/2, 1/2], c = the step's
+      // own sigma of the coordinate's group (a fixed bijection for the test; the stated density is
+      // transformed with it): the Gaussian's mass spreads over most of the 401 cells whatever sigma.
+      const double c_map = sx.sigma[static_cast<size_t>(AptTarget::group(i))];
       const auto sample = [&](Uniforms& u) -> std::optional<double> {
         const auto y = step.propose(x0, u);
         if (!y) return std::nullopt;
         double d = (*y)[i] - x0[i];
         d -= std::round(d);  // [-1/2, 1/2]
-        return std::clamp(d + 0.5, 0.0, std::nextafter(1.0, 0.0));
+        return std::clamp(0.5 + std::atan(d / c_map) / kPi, 0.0, std::nextafter(1.0, 0.0));
       };
-      const auto pdf = [&](double v) { return factor(sx, i, v - 0.5); };
+      const auto pdf = [&](double v) {
+        const double d = c_map * std::tan(kPi * (v - 0.5));
+        if (!(std::abs(d) <= 0.5)) return 0.0;
+        return factor(sx, i, d) * c_map * kPi * (1.0 + (d / c_map) * (d / c_map));
+      };
       SamplerChi2Options o;
       o.samples = ctx.size(100000, 400000);
       o.seed = ctx.seed;
@@ -178,7 +187,7 @@ const bool registered = [] {
       }});
   Registry::global().add(Check{
       .name = "mcmc.apt.cornell.chi2",
-      .description = "APT small step proposal chi-square: 1D marginals of coordinates 0 and 2 at three states against "
+      .description = "APT small step proposal chi-square: 1D marginals of coordinates 0, 2 and 4 at three states against "
                      "the stated density's factor, 401 cells, alpha 1e-5 Šidák",
       .kind = CheckKind::kStatistical,
       .run = [](const CheckContext& ctx) {
