@@ -59,10 +59,10 @@ CheckResult run_pairwise(const K& kernel, const AptTarget& target, const CheckCo
   const auto start = [&target](Uniforms& u) { return start_state(target, u); };
   const auto r = mcmc::check_pairwise_balance<K>(kernel, start, ctx.size(2000, 20000), ctx.seed, hash_string(name));
   CheckResult res = pairwise_record(r, name);
-  // How often the KKT loop removed a group (Listing 1 lines 22-26) and how the scales spread, over
-  // the same start states.
+  // How often the KKT loop removed a group (Listing 1 lines 22-26), how the scales spread and the
+  // mean acceptance of one proposal (the kernel's own, broken or not), over the same start states.
   int64_t removed = 0, states = 0;
-  double smin = 1.0, smax = 0.0;
+  double smin = 1.0, smax = 0.0, acceptance = 0.0;
   for (int64_t i = 0; i < std::min<int64_t>(r.pairs, 500); ++i) {
     Rng rng = Rng::for_sample(ctx.seed, hash_string(name), static_cast<uint64_t>(i));
     RngUniforms u(rng);
@@ -70,6 +70,7 @@ CheckResult run_pairwise(const K& kernel, const AptTarget& target, const CheckCo
     if (!(target.density(x) > 0.0)) continue;
     const AptScales s = target.scales(x);
     ++states;
+    if (const auto m = kernel.sample_move(x, u)) acceptance += kernel.acceptance(x, *m);
     removed += s.kkt.rounds > 1 ? 1 : 0;
     for (double v : s.sigma) {
       smin = std::min(smin, v);
@@ -80,8 +81,10 @@ CheckResult run_pairwise(const K& kernel, const AptTarget& target, const CheckCo
   res.details["states_with_kkt_removal"] = removed;
   res.details["sigma_min"] = smin;
   res.details["sigma_max"] = smax;
-  res.message += fmt::format("; over {} start states with f > 0: sigma in [{:.3g}, {:.3g}], KKT removed a group in {}",
-                             states, smin, smax, removed);
+  res.details["mean_acceptance"] = states > 0 ? acceptance / static_cast<double>(states) : 0.0;
+  res.message += fmt::format("; over {} start states with f > 0: sigma in [{:.3g}, {:.3g}], KKT removed a group in {}, "
+                             "mean acceptance of one proposal {:.3f}",
+                             states, smin, smax, removed, states > 0 ? acceptance / static_cast<double>(states) : 0.0);
   return res;
 }
 
