@@ -325,6 +325,11 @@ std::optional<HsltMutation::JumpPrediction> HsltMutation::jump_predict(const Mlt
     const Ray ray{o, d / len, 1e-5 * std::max(1.0, glm::length(o)), kInfinity};
     const std::optional<Hit> hit = scene.intersect(ray);
     if (!hit) return std::nullopt;
+    // Grazing rays (a previous vertex on the tangent plane of x_i, e.g. two vertices on one plane):
+    // G ~ 0, and x'_i is not recoverable from the pair; rejected here and hence in the density.
+    if (!(std::abs(glm::dot(ray.d, tangent_plane_normal(X.vertices[static_cast<size_t>(i)]))) >= kJumpMinCos) ||
+        !(std::abs(glm::dot(ray.d, hit->ng)) >= kJumpMinCos))
+      return std::nullopt;
     PathVertex pv = surface_vertex(*ctx_, *hit);
     if (!pv.is_surface() || pv.bsdf == nullptr) return std::nullopt;
     jp.y.v[static_cast<size_t>(i)] = std::move(pv);

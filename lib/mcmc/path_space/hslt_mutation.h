@@ -75,7 +75,9 @@
 //    towards x'_i (Fig. 8) on ANY shape (another primitive or shape: the jump); the segment to the
 //    other fixed endpoint must be unoccluded. Valid when every y_i is a scattering surface vertex
 //    and y is a path whose interior vertices are all non-Dirac ("non-zero throughput" is left to
-//    pi(y) in the acceptance).
+//    pi(y) in the acceptance); a ray with |cos| < kJumpMinCos against the tangent plane of x_i or
+//    the surface hit is rejected (grazing: G ~ 0, and x'_i is not recoverable from the pair when
+//    y_prev lies on that plane).
 //  Bidirectionally invalid (Sec. 5.2): the regular walk does not land both ways, i.e. neither
 //    x -> H(y) (in x's frames) lands at y nor y -> H(x) (in y's frames) lands at x; otherwise the
 //    jump is rejected. This condition is symmetric in (x, y), and the regular T(x -> y) needs both
@@ -156,6 +158,7 @@ class HsltMutation {
 
   static constexpr double kImageFraction = 0.02;     // Sec. 6.2: desired change of x_{k-1}, 2% of the image
   static constexpr bool kDefaultJump = true;         // Sec. 5.2: the subspace jump is the paper's behaviour
+  static constexpr double kJumpMinCos = 1e-3;        // jump rays more grazing than this (to x'_i or y_i): rejected
 
   // stratify: the step sizes of Sec. 6.2-6.3 (min of the BSDF step and the weighted ray-differential
   // step per axis); false: the isotropic BSDF steps of Sec. 6.1 only.
