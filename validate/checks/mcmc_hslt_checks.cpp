@@ -77,7 +77,8 @@ nlohmann::json counters_json(const HsltCounters& c) {
           {"iterations_per_walk", s.iterations_per_walk()},
           {"non_reversible", s.non_reversible},
           {"non_reversible_fraction_of_converged", s.non_reversible_fraction()},
-          {"generated", s.generated}};
+          {"generated", s.generated},
+          {"jumps", {{"attempted", s.jump_attempted}, {"projected", s.jump_projected}, {"succeeded", s.jump_succeeded}}}};
 }
 
 // A BDPT path the mutation applies to (any path after 4096 tries: the pair then has no flux).
@@ -563,11 +564,15 @@ class CountJumps {
  public:
   using State = typename K::State;
   using Move = typename K::Move;
-  CountJumps(const K& k, const HsltMutation& m, std::atomic<int64_t>* jumps) : k_(&k), m_(&m), jumps_(jumps) {}
+  CountJumps(const K& k, const HsltMutation& m, std::atomic<int64_t>* jumps, std::atomic<int64_t>* live)
+      : k_(&k), m_(&m), jumps_(jumps), live_(live) {}
   double target_density(const State& x) const { return k_->target_density(x); }
   std::optional<Move> sample_move(const State& x, Uniforms& u) const {
     std::optional<Move> mv = k_->sample_move(x, u);
-    if (mv && m_->jump_density(x, k_->destination(*mv)) > 0.0) jumps_->fetch_add(1, std::memory_order_relaxed);
+    if (mv && m_->jump_density(x, k_->destination(*mv)) > 0.0) {
+      jumps_->fetch_add(1, std::memory_order_relaxed);
+      if (k_->acceptance(x, *mv) > 0.0) live_->fetch_add(1, std::memory_order_relaxed);
+    }
     return mv;
   }
   const State& destination(const Move& m) const { return k_->destination(m); }
@@ -580,6 +585,7 @@ class CountJumps {
   const K* k_;
   const HsltMutation* m_;
   std::atomic<int64_t>* jumps_;
+  std::atomic<int64_t>* live_;
 };
 
 nlohmann::json jump_counters_json(const HsltCounters& c) {
@@ -602,19 +608,22 @@ CheckResult jump_pairwise_with(const CheckContext& cx, const std::string& name, 
   const auto ref = [&hm](int, const MltPath& x, const MltPath& y) { return hm.density(x, y); };
   using R = WithReferenceDensity<K, decltype(ref)>;
   const R k(kernel, ref, 8);
-  std::atomic<int64_t> jumps{0};
-  const CountJumps<R> ck(k, hm, &jumps);
+  std::atomic<int64_t> jumps{0}, live{0};
+  const CountJumps<R> ck(k, hm, &jumps, &live);
   const auto r = mcmc::check_pairwise_balance<CountJumps<R>>(ck, start, cx.size(1000, 10000), cx.seed, hash_string(name));
   CheckResult res = pairwise_record(r, name);
-  const int64_t j = jumps.load();
+  const int64_t j = jumps.load(), jl = live.load();
   res.details["jump_pairs"] = j;
+  res.details["jump_pairs_with_positive_acceptance"] = jl;
   res.details["walks"] = counters_json(*counters);
   res.details["jumps"] = jump_counters_json(*counters);
-  const bool ok = res.passed && j > 0;
-  res.passed = broken ? !ok && j > 0 : ok;
-  res.message = fmt::format("glossy.json, gamma {}: {}; {} jump pairs (jumps attempted {}, succeeded {})", kJumpGamma,
-                            res.message, j, snapshot(*counters).jump_attempted, snapshot(*counters).jump_succeeded);
-  if (j == 0) res.message += "; NO JUMP PAIR SAMPLED";
+  const bool ok = res.passed && jl > 0;
+  res.passed = broken ? !ok && jl > 0 : ok;
+  res.message = fmt::format("glossy.json, gamma {}: {}; {} jump pairs, {} of them with a(x->y) > 0 (jumps attempted {}, "
+                            "projected {}, succeeded {})",
+                            kJumpGamma, res.message, j, jl, snapshot(*counters).jump_attempted,
+                            snapshot(*counters).jump_projected, snapshot(*counters).jump_succeeded);
+  if (jl == 0) res.message += "; NO JUMP PAIR WITH POSITIVE ACCEPTANCE SAMPLED";
   if (broken) res.message = (res.passed ? "broken variant rejected as required: " : "BROKEN VARIANT NOT DETECTED: ") + res.message;
   return res;
 }
@@ -651,6 +660,7 @@ CheckResult hslt_jump_density(bool broken, const CheckContext& cx, const std::st
     int jump = 0, fd = 0, zero = 0, fail = 0;
     int zero_reason = -1;  // 0 structure, 1 the walk converges, 2 replay, 3 not bidirectionally invalid, 4 other
     double rel = 0, g_lo = 1, g_hi = 1, stated = 0, t_fd = 0;
+    int reverse_positive = 0;  // T(y -> x) > 0: the jump can be accepted
     int k = 0;
   };
   std::vector<Out> out(static_cast<size_t>(n));
@@ -664,7 +674,6 @@ CheckResult hslt_jump_density(bool broken, const CheckContext& cx, const std::st
     const std::vector<Eigen::Matrix2d> L = m.step_factors(x, *X);
     for (int t = 0; t < 16; ++t) {
       const Eigen::VectorXd target = m.perturbed_target(*X, L, u);
-      if (m.walk(*X, target).status == HsltWalkStatus::kConverged) continue;
       const auto jp = m.jump_predict(x, *X, target);
       if (!jp || !m.jump_applicable(jp->y) || !m.bidirectionally_invalid(x, jp->y)) continue;
       const MltPath& y = jp->y;
@@ -675,9 +684,10 @@ CheckResult hslt_jump_density(bool broken, const CheckContext& cx, const std::st
       const double stated = broken ? bad.density(x, y) : m.density(x, y);
       const HsltMutation::JumpParts parts = m.jump_parts(x, y);
       o.g_lo = o.g_hi = parts.g_ratio;
+      o.reverse_positive = m.density(y, x) > 0.0;
       if (!(stated > 0.0)) {
         o.zero = 1;
-        o.zero_reason = !parts.structure ? 0 : !parts.walk_fails ? 1 : !parts.replay_lands ? 2 : !parts.bidirectionally_invalid ? 3 : 4;
+        o.zero_reason = !parts.structure ? 0 : !parts.replay_lands ? 2 : !parts.bidirectionally_invalid ? 3 : 4;
         return;
       }
       const Eigen::Index dim = 2 * (k - 1);
@@ -716,9 +726,11 @@ CheckResult hslt_jump_density(bool broken, const CheckContext& cx, const std::st
   double worst = 0, g_lo = 1e300, g_hi = 0;
   std::vector<double> rels;
   std::array<int64_t, 5> reasons{};
+  int64_t reverse_positive = 0;
   nlohmann::json worst_pairs = nlohmann::json::array();
   for (const Out& o : out) {
     if (o.zero_reason >= 0) ++reasons[static_cast<size_t>(o.zero_reason)];
+    reverse_positive += o.reverse_positive;
     if (o.fail && worst_pairs.size() < 8)
       worst_pairs.push_back({{"stated", o.stated}, {"t_fd", o.t_fd}, {"g_ratio", o.g_lo}, {"k", o.k}});
     jumps += o.jump;
@@ -740,13 +752,13 @@ CheckResult hslt_jump_density(bool broken, const CheckContext& cx, const std::st
   const bool ok = fd >= 20 && zero == 0 && fail == 0;
   res.passed = broken ? fail > 0 : ok;
   res.message = fmt::format("{} jumps sampled, {} with a finite-difference Jacobian: max relative |T/T_fd - 1| = {:.3g} "
-                            "(median {:.3g}; {} above {:.0e}), {} stated 0; G-ratios {:.4g} .. {:.4g}",
-                            jumps, fd, worst, median, fail, kTol, zero, g_lo, g_hi);
+                            "(median {:.3g}; {} above {:.0e}), {} stated 0, {} with T(y->x) > 0; G-ratios {:.4g} .. {:.4g}",
+                            jumps, fd, worst, median, fail, kTol, zero, reverse_positive, g_lo, g_hi);
   if (broken) res.message = (res.passed ? "broken variant rejected as required: " : "BROKEN VARIANT NOT DETECTED: ") + res.message;
   res.details = {{"jumps", jumps}, {"finite_difference_pairs", fd}, {"stated_zero", zero}, {"above_tolerance", fail},
-                 {"max_rel", worst}, {"median_rel", median}, {"g_ratio_min", g_lo}, {"g_ratio_max", g_hi},
+                 {"max_rel", worst}, {"reverse_density_positive", reverse_positive}, {"median_rel", median}, {"g_ratio_min", g_lo}, {"g_ratio_max", g_hi},
                  {"tolerance", kTol}, {"step", kEps}, {"failed_pairs", worst_pairs},
-                 {"stated_zero_because", {{"structure", reasons[0]}, {"walk_converges", reasons[1]}, {"replay", reasons[2]},
+                 {"stated_zero_because", {{"structure", reasons[0]}, {"replay", reasons[2]},
                                           {"not_bidirectionally_invalid", reasons[3]}, {"other", reasons[4]}}}};
   return res;
 }

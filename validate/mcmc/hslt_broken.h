@@ -87,7 +87,7 @@ namespace tb::path_space {
 // taken for the density on the surface); the regular branch and the proposals unchanged.
 inline double hslt_jump_density_without_g_ratio(const HsltMutation& m, const MltPath& x, const MltPath& y) {
   const HsltMutation::JumpParts p = m.jump_parts(x, y);
-  if (!p.structure || !p.walk_fails || !p.replay_lands || !p.bidirectionally_invalid) return 0.0;
+  if (!p.structure || !p.replay_lands || !p.bidirectionally_invalid) return 0.0;
   return p.perturbation * p.measure;
 }
 
@@ -98,7 +98,7 @@ class HsltJumpWithoutGRatio {
   std::optional<MltPath> propose(const MltPath& x, Uniforms& u) const { return m_.propose(x, u); }
   double density(const MltPath& x, const MltPath& y) const {
     const HsltMutation::DensityParts p = m_.density_parts(x, y);
-    if (p.structure && p.forward_lands && p.reverse_lands) return p.perturbation * p.measure;
+    if (p.structure && p.forward_lands && p.reverse_lands) return m_.density(x, y);
     return hslt_jump_density_without_g_ratio(m_, x, y);
   }
   bool applicable(const MltPath& x) const { return m_.applicable(x); }

@@ -268,9 +268,27 @@ HsltMutation::DensityParts HsltMutation::density_parts(const MltPath& x, const M
 
 double HsltMutation::density(const MltPath& x, const MltPath& y) const {
   const DensityParts p = density_parts(x, y);
-  if (p.structure && p.forward_lands && p.reverse_lands) return p.perturbation * p.measure;
+  if (p.structure && p.forward_lands && p.reverse_lands) {
+    // The regular branch is taken only when the first prediction towards h* = H(y) does not jump.
+    if (jump_ && jump_applicable(x)) {
+      const std::optional<HsltPath> X = hslt_path(x);
+      const std::optional<HsltPath> Y = hslt_path(y, &*X);
+      if (jump_preempts(x, *X, hslt_constraints(*Y))) return 0.0;
+    }
+    return p.perturbation * p.measure;
+  }
   // Sec. 5.2: the two branches are exclusive (the jump needs both landings to fail).
   return jump_ ? jump_density(x, y) : 0.0;
+}
+
+std::optional<MltPath> HsltMutation::jump_proposal(const MltPath& x, const HsltPath& X, const Eigen::VectorXd& target) const {
+  std::optional<JumpPrediction> jp = jump_predict(x, X, target);
+  if (!jp || !jump_applicable(jp->y) || !bidirectionally_invalid(x, jp->y)) return std::nullopt;
+  return std::move(jp->y);
+}
+
+bool HsltMutation::jump_preempts(const MltPath& x, const HsltPath& X, const Eigen::VectorXd& target) const {
+  return jump_proposal(x, X, target).has_value();
 }
 
 bool HsltMutation::jump_applicable(const MltPath& x) const {
@@ -400,8 +418,6 @@ HsltMutation::JumpParts HsltMutation::jump_parts(const MltPath& x, const MltPath
   p.measure = measure_factor(*X, std::vector<bool>(L.size(), false));
   p.g_ratio = std::exp(log_g);
   if (!(p.perturbation > 0) || !(p.measure > 0) || !std::isfinite(p.g_ratio)) return p;
-  p.walk_fails = walk(*X, p.target).status != HsltWalkStatus::kConverged;
-  if (!p.walk_fails) return p;
   const std::optional<JumpPrediction> jp = jump_predict(x, *X, p.target);
   if (!jp) return p;
   double dist = 0.0;
@@ -415,7 +431,7 @@ HsltMutation::JumpParts HsltMutation::jump_parts(const MltPath& x, const MltPath
 
 double HsltMutation::jump_density(const MltPath& x, const MltPath& y) const {
   const JumpParts p = jump_parts(x, y);
-  if (!p.structure || !p.walk_fails || !p.replay_lands || !p.bidirectionally_invalid) return 0.0;
+  if (!p.structure || !p.replay_lands || !p.bidirectionally_invalid) return 0.0;
   const double t = p.perturbation * p.measure * p.g_ratio;
   return std::isfinite(t) ? t : 0.0;
 }
@@ -434,21 +450,24 @@ std::optional<MltPath> HsltMutation::propose(const MltPath& x, Uniforms& u) cons
   c.proposals.fetch_add(1, kRelaxed);
   // Fig. 12: mutate_half_vectors (Sec. 6.1), h_to_positions (Sec. 5), reverse check (Sec. 5.2).
   const Eigen::VectorXd target = perturbed_target(*X, step_factors(x, *X), u);
+  // Sec. 5.2: the subspace jump from the walk's first prediction, taken when the prediction is a
+  // valid path and the pair is bidirectionally invalid (a condition on the pair alone).
+  if (jump_ && jump_applicable(x)) {
+    c.jump_attempted.fetch_add(1, kRelaxed);
+    std::optional<JumpPrediction> jp = jump_predict(x, *X, target);
+    if (jp && jump_applicable(jp->y)) {
+      c.jump_projected.fetch_add(1, kRelaxed);
+      if (bidirectionally_invalid(x, jp->y)) {
+        c.jump_succeeded.fetch_add(1, kRelaxed);
+        c.generated.fetch_add(1, kRelaxed);
+        return std::move(jp->y);
+      }
+    }
+  }
   const HsltWalkResult r = walk(*X, target);
   c.forward_status[static_cast<size_t>(r.status)].fetch_add(1, kRelaxed);
   c.iterations_all.fetch_add(r.iterations, kRelaxed);
-  if (r.status != HsltWalkStatus::kConverged) {
-    // Sec. 5.2: the subspace jump from the walk's first prediction.
-    if (!jump_ || !jump_applicable(x)) return std::nullopt;
-    c.jump_attempted.fetch_add(1, kRelaxed);
-    std::optional<JumpPrediction> jp = jump_predict(x, *X, target);
-    if (!jp || !jump_applicable(jp->y)) return std::nullopt;
-    c.jump_projected.fetch_add(1, kRelaxed);
-    if (!bidirectionally_invalid(x, jp->y)) return std::nullopt;
-    c.jump_succeeded.fetch_add(1, kRelaxed);
-    c.generated.fetch_add(1, kRelaxed);
-    return std::move(jp->y);
-  }
+  if (r.status != HsltWalkStatus::kConverged) return std::nullopt;
   c.iterations_converged.fetch_add(r.iterations, kRelaxed);
   MltPath y = path_at(x, r.path);
   const std::optional<HsltPath> Y2 = applicable(y) ? hslt_path(y) : std::nullopt;

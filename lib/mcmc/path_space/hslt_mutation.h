@@ -127,9 +127,9 @@ struct HsltCounters {
   std::atomic<int64_t> iterations_all{0};        // ... of all forward walks
   std::atomic<int64_t> non_reversible{0};        // converged forward walk, reverse walk does not return
   std::atomic<int64_t> generated{0};             // proposals returned (reversible walks and jumps)
-  // Subspace jumps (Sec. 5.2; Table 3 "Submanifold jump"): attempted = failed forward walk on a path
-  // the jump applies to; projected = the first prediction gave a valid path; succeeded = it was
-  // also bidirectionally invalid and is returned as the proposal.
+  // Subspace jumps (Sec. 5.2; Table 3 "Submanifold jump"): attempted = proposal on a path the jump
+  // applies to; projected = the first prediction gave a valid path; succeeded = the pair was also
+  // bidirectionally invalid and the prediction is returned as the proposal (no walk).
   std::atomic<int64_t> jump_attempted{0};
   std::atomic<int64_t> jump_projected{0};
   std::atomic<int64_t> jump_succeeded{0};
@@ -226,11 +226,13 @@ class HsltMutation {
     double perturbation = 0;      // N(h* - H(x); L L^T(x))
     double measure = 0;           // |det J_area(x)|
     double g_ratio = 0;           // prod_i G(y_prev, y_i) / G(y_prev, x'_i)
-    bool walk_fails = false;      // the walk x -> h* does not converge
     bool replay_lands = false;    // the prediction from h* reproduces y (kLandingTolerance)
     bool bidirectionally_invalid = false;
   };
   JumpParts jump_parts(const MltPath& x, const MltPath& y) const;
+  // The jump propose takes from X towards `target`, if any (valid prediction, bidirectionally invalid).
+  std::optional<MltPath> jump_proposal(const MltPath& x, const HsltPath& X, const Eigen::VectorXd& target) const;
+  bool jump_preempts(const MltPath& x, const HsltPath& X, const Eigen::VectorXd& target) const;
   double jump_density(const MltPath& x, const MltPath& y) const;
 
   bool jump() const { return jump_; }
