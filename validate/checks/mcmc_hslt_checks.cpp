@@ -173,7 +173,9 @@ ReplayCounts replay_scene(const CheckContext& cx, const std::string& name, const
   const LoadedScene& sc = scene(file);
   // gamma = 1 (10 x Sec. 6.1's step) without the stratification of Sec. 6.2 (which would cap the
   // steps): non-reversible walks must occur for the check to test anything.
-  const HsltMutation m(sc.ctx, 1.0, nullptr, false);
+  // Without the subspace jump (Sec. 5.2): with it, a reversible pair whose first prediction jumps
+  // has T = 0 on the regular branch (the branches are exclusive; mcmc.hslt.jump.* check that part).
+  const HsltMutation m(sc.ctx, 1.0, nullptr, false, HsltMutation::kImageFraction, false);
   const auto start = applicable_start(sc, m);
   const int64_t n = cx.size(3000, 30000);
   std::vector<ReplayCounts> out(static_cast<size_t>(n));
