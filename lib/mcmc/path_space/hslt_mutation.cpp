@@ -530,8 +530,9 @@ int64_t render_hslt(const World& world, const RenderSettings& settings, Film& fi
              100.0 * c.generation_rate(), c.non_reversible, 100.0 * c.non_reversible_fraction(), 100.0 * acc_generated, 100.0 * acc,
              stats.mutations_per_second());
   // Table 3 "Submanifold jump" (Sec. 5.2).
-  fmt::print("hslt subspace jumps (Sec. 5.2, {}): {} attempted (failed forward walks), {} projected to a valid path, {} "
-             "succeeded (bidirectionally invalid) = {:.1f}% of the attempted\n",
+  fmt::print("hslt subspace jumps (Sec. 5.2, {}): {} attempted (proposals on paths without a specular vertex), {} first "
+             "predictions projected to a valid path, {} succeeded (bidirectionally invalid, proposed as jumps) = {:.2f}% of the "
+             "attempted\n",
              jump ? "on" : "off", c.jump_attempted, c.jump_projected, c.jump_succeeded, 100.0 * c.jump_success_rate());
   return stats.chains;
 }
