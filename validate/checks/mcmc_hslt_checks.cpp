@@ -20,11 +20,18 @@
 //    perturbed, the mirror vertex y_2 in the tangent plane of x_2 against T times the area factor of
 //    the Dirac-pinned y_1 (sees the Dirac factors of the density);
 //  - mcmc.hslt.image.glossy: the integrator's mixture through run_mlt against BDPT (8 x 8, depth 3);
+//  - mcmc.hslt.jump.pairwise.glossy: pairwise balance with the subspace jump of Sec. 5.2 (gamma 1),
+//    jump pairs counted (fails without a jump pair of positive acceptance);
+//  - mcmc.hslt.jump.density: the stated jump density against N(h*) / |det dy/dh*| from central
+//    differences of the prediction-projection map;
+//  - the chi-square and reversibility checks run with the jump off (they test the regular branch);
 //  - negative controls (validate/mcmc/hslt_broken.h), passing when the broken variant IS caught:
 //    mcmc.hslt.reversibility.no_reverse_check.negative_control (T without the landing tests),
 //    mcmc.hslt.proposal_chi2.missing_jacobian.negative_control (T without |det J_area|),
 //    mcmc.hslt.proposal_chi2.dg_mirror.no_dirac_factor.negative_control (T without the Dirac
-//    factors) and mcmc.hslt.image.glossy.missing_jacobian.negative_control.
+//    factors), mcmc.hslt.image.glossy.missing_jacobian.negative_control, and
+//    mcmc.hslt.jump.{density,pairwise.glossy}.no_g_ratio.negative_control (the jump density
+//    without the G-ratio of Sec. 5.2).
 #include <algorithm>
 #include <array>
 #include <atomic>
