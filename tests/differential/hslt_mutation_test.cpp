@@ -36,9 +36,10 @@ TEST(HsltMutation, RegisteredOutsideTheDefaultMixture) {
 TEST(HsltMutation, ProposalsHavePositiveDensityBothWaysAndKeepTheEndpoints) {
   const Glossy g;
   const HsltMutation m(g.ctx);
+  const HsltMutation no_jump(g.ctx, HsltMutation::kDefaultGamma, nullptr, true, HsltMutation::kImageFraction, false);
   Rng rng = Rng::for_sample(1, 11, 0);
   RngUniforms u(rng);
-  int paths = 0, proposed = 0;
+  int paths = 0, proposed = 0, preempted = 0;
   for (int a = 0; a < 20000 && paths < 40; ++a) {
     const auto x = sample_bdpt_path(g.ctx, u, 3, 2);
     if (!x || !m.applicable(*x)) continue;
@@ -58,14 +59,56 @@ TEST(HsltMutation, ProposalsHavePositiveDensityBothWaysAndKeepTheEndpoints) {
       EXPECT_TRUE(same_vertex(x->v.front(), y->v.front()));
       EXPECT_TRUE(same_vertex(x->v.back(), y->v.back()));
       EXPECT_GT(m.density(*x, *y), 0.0);
-      EXPECT_GT(m.density(*y, *x), 0.0);
+      // A subspace jump (Sec. 5.2) need not be reversible by a jump; a regular move is reversible
+      // by the regular branch (T > 0 without jumps), which a jump from y towards H(x) may preempt.
+      if (!(m.jump_density(*x, *y) > 0.0)) {
+        EXPECT_GT(no_jump.density(*y, *x), 0.0);
+        preempted += !(m.density(*y, *x) > 0.0);
+      }
     }
   }
   EXPECT_EQ(paths, 40);
   EXPECT_GT(proposed, 60);
+  EXPECT_LE(10 * preempted, proposed);
   const HsltCountsSnapshot c = snapshot(*m.counters());
   EXPECT_EQ(c.generated, proposed);
   EXPECT_GE(c.proposals, c.generated);
+}
+
+// Sec. 5.2: with gamma = 1 jumps occur; each has a positive stated jump density, zero regular
+// density (the branches are exclusive), is bidirectionally invalid, and the counters are ordered;
+// with the option off no jump is proposed.
+TEST(HsltMutation, SubspaceJumpsAreExclusiveOfTheRegularBranch) {
+  const Glossy g;
+  for (const bool jump : {true, false}) {
+    const HsltMutation m(g.ctx, 1.0, nullptr, false, HsltMutation::kImageFraction, jump);
+    Rng rng = Rng::for_sample(1, 12, jump ? 1 : 0);
+    RngUniforms u(rng);
+    int jumps = 0, reversible_jumps = 0;
+    for (int a = 0; a < 20000 && jumps < 20; ++a) {
+      const auto x = sample_bdpt_path(g.ctx, u, 3, 2);
+      if (!x || !m.applicable(*x)) continue;
+      const auto y = m.propose(*x, u);
+      if (!y || !(m.jump_density(*x, *y) > 0.0)) continue;
+      ++jumps;
+      EXPECT_TRUE(m.bidirectionally_invalid(*x, *y));
+      const HsltMutation::DensityParts p = m.density_parts(*x, *y);
+      EXPECT_FALSE(p.structure && p.forward_lands && p.reverse_lands);
+      EXPECT_DOUBLE_EQ(m.density(*x, *y), m.jump_density(*x, *y));
+      reversible_jumps += m.density(*y, *x) > 0.0;
+    }
+    const HsltCountsSnapshot c = snapshot(*m.counters());
+    EXPECT_LE(c.jump_succeeded, c.jump_projected);
+    EXPECT_LE(c.jump_projected, c.jump_attempted);
+    if (jump) {
+      EXPECT_EQ(jumps, 20);
+      EXPECT_EQ(c.jump_succeeded, jumps);
+      EXPECT_GT(reversible_jumps, 0);
+    } else {
+      EXPECT_EQ(jumps, 0);
+      EXPECT_EQ(c.jump_attempted, 0);
+    }
+  }
 }
 
 // Sec. 6.2-6.3: the stratified step is never larger than the BSDF step on either axis, and without

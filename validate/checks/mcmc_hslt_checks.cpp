@@ -20,12 +20,21 @@
 //    perturbed, the mirror vertex y_2 in the tangent plane of x_2 against T times the area factor of
 //    the Dirac-pinned y_1 (sees the Dirac factors of the density);
 //  - mcmc.hslt.image.glossy: the integrator's mixture through run_mlt against BDPT (8 x 8, depth 3);
+//  - mcmc.hslt.jump.pairwise.glossy: pairwise balance with the subspace jump of Sec. 5.2 (gamma 1),
+//    jump pairs counted (fails without a jump pair of positive acceptance);
+//  - mcmc.hslt.jump.density: the stated jump density against N(h*) / |det dy/dh*| from central
+//    differences of the prediction-projection map;
+//  - the chi-square and reversibility checks run with the jump off (they test the regular branch);
 //  - negative controls (validate/mcmc/hslt_broken.h), passing when the broken variant IS caught:
 //    mcmc.hslt.reversibility.no_reverse_check.negative_control (T without the landing tests),
 //    mcmc.hslt.proposal_chi2.missing_jacobian.negative_control (T without |det J_area|),
 //    mcmc.hslt.proposal_chi2.dg_mirror.no_dirac_factor.negative_control (T without the Dirac
-//    factors) and mcmc.hslt.image.glossy.missing_jacobian.negative_control.
+//    factors), mcmc.hslt.image.glossy.missing_jacobian.negative_control, and
+//    mcmc.hslt.jump.{density,pairwise.glossy}.no_g_ratio.negative_control (the jump density
+//    without the G-ratio of Sec. 5.2).
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <cmath>
 #include <functional>
 #include <memory>
@@ -75,7 +84,8 @@ nlohmann::json counters_json(const HsltCounters& c) {
           {"iterations_per_walk", s.iterations_per_walk()},
           {"non_reversible", s.non_reversible},
           {"non_reversible_fraction_of_converged", s.non_reversible_fraction()},
-          {"generated", s.generated}};
+          {"generated", s.generated},
+          {"jumps", {{"attempted", s.jump_attempted}, {"projected", s.jump_projected}, {"succeeded", s.jump_succeeded}}}};
 }
 
 // A BDPT path the mutation applies to (any path after 4096 tries: the pair then has no flux).
@@ -170,7 +180,9 @@ ReplayCounts replay_scene(const CheckContext& cx, const std::string& name, const
   const LoadedScene& sc = scene(file);
   // gamma = 1 (10 x Sec. 6.1's step) without the stratification of Sec. 6.2 (which would cap the
   // steps): non-reversible walks must occur for the check to test anything.
-  const HsltMutation m(sc.ctx, 1.0, nullptr, false);
+  // Without the subspace jump (Sec. 5.2): with it, a reversible pair whose first prediction jumps
+  // has T = 0 on the regular branch (the branches are exclusive; mcmc.hslt.jump.* check that part).
+  const HsltMutation m(sc.ctx, 1.0, nullptr, false, HsltMutation::kImageFraction, false);
   const auto start = applicable_start(sc, m);
   const int64_t n = cx.size(3000, 30000);
   std::vector<ReplayCounts> out(static_cast<size_t>(n));
@@ -293,7 +305,8 @@ CheckResult hslt_chi2(bool broken, const CheckContext& cx, const std::string& na
   // gamma = 1 and a desired image change of 0.5% (not 2%): the ray-differential step of Sec. 6.2
   // (~0.03) is then below the BSDF step (0.09), so the anisotropic stratified step is the one
   // sampled and stated (at the defaults the BSDF step is the smaller one on this path).
-  const HsltMutation m(sc.ctx, 1.0, nullptr, true, 0.005);
+  // Without the subspace jump (Sec. 5.2): the expected counts integrate the regular branch only.
+  const HsltMutation m(sc.ctx, 1.0, nullptr, true, 0.005, false);
   CheckResult res;
   res.statistic_name = "p-value";
   const std::optional<MltPath> xo = chi2_path(sc, m, cx.seed);
@@ -548,6 +561,231 @@ CheckResult hslt_image(bool broken, const CheckContext& cx, const std::string& n
   return res;
 }
 
+// ---- subspace jump (Sec. 5.2) ---------------------------------------------------------------
+// gamma = 1 without stratification: walks fail often enough (about a third on the glossy scene)
+// for jumps to be sampled.
+constexpr double kJumpGamma = 1.0;
+
+// A kernel wrapper that counts the sampled moves whose destination is reached by a jump
+// (T_jump(x -> y) > 0; the two branches are exclusive).
+template <class K>
+class CountJumps {
+ public:
+  using State = typename K::State;
+  using Move = typename K::Move;
+  CountJumps(const K& k, const HsltMutation& m, std::atomic<int64_t>* jumps, std::atomic<int64_t>* live)
+      : k_(&k), m_(&m), jumps_(jumps), live_(live) {}
+  double target_density(const State& x) const { return k_->target_density(x); }
+  std::optional<Move> sample_move(const State& x, Uniforms& u) const {
+    std::optional<Move> mv = k_->sample_move(x, u);
+    if (mv && m_->jump_density(x, k_->destination(*mv)) > 0.0) {
+      jumps_->fetch_add(1, std::memory_order_relaxed);
+      if (k_->acceptance(x, *mv) > 0.0) live_->fetch_add(1, std::memory_order_relaxed);
+    }
+    return mv;
+  }
+  const State& destination(const Move& m) const { return k_->destination(m); }
+  Move reverse(const State& x, const Move& m) const { return k_->reverse(x, m); }
+  double move_density(const State& x, const Move& m) const { return k_->move_density(x, m); }
+  mcmc::MoveTerms move_terms(const State& x, const Move& m) const { return k_->move_terms(x, m); }
+  double acceptance(const State& x, const Move& m) const { return k_->acceptance(x, m); }
+
+ private:
+  const K* k_;
+  const HsltMutation* m_;
+  std::atomic<int64_t>* jumps_;
+  std::atomic<int64_t>* live_;
+};
+
+nlohmann::json jump_counters_json(const HsltCounters& c) {
+  const HsltCountsSnapshot s = snapshot(c);
+  return {{"attempted", s.jump_attempted}, {"projected", s.jump_projected}, {"succeeded", s.jump_succeeded}};
+}
+
+// Pairwise detailed balance with jumps: the kernel's acceptance from the mutation under test
+// (`broken`: HsltJumpWithoutGRatio, whose jump density lacks the G-ratio), the reference density
+// the mutation's stated T (regular branch + jump). Fails when no jump pair was sampled.
+template <class P>
+CheckResult jump_pairwise_with(const CheckContext& cx, const std::string& name, const LoadedScene& sc,
+                               const HsltMutation& hm, P proposal, bool broken, const std::shared_ptr<HsltCounters>& counters) {
+  const auto mut = std::make_shared<const PathProposalMutation<P>>(
+      "hslt", 1.0, std::move(proposal), [](const P& p, const MltPath& x) { return p.applicable(x); });
+  const auto start = applicable_start(sc, hm);
+  const PathMutation& m = *mut;
+  const auto kernel = mcmc::MetropolisHastings(PathTarget{&sc.ctx}, mcmc::SingleProposal(MutationProposal{&m, nullptr}));
+  using K = decltype(kernel);
+  const auto ref = [&hm](int, const MltPath& x, const MltPath& y) { return hm.density(x, y); };
+  using R = WithReferenceDensity<K, decltype(ref)>;
+  const R k(kernel, ref, 8);
+  std::atomic<int64_t> jumps{0}, live{0};
+  const CountJumps<R> ck(k, hm, &jumps, &live);
+  const auto r = mcmc::check_pairwise_balance<CountJumps<R>>(ck, start, cx.size(1000, 10000), cx.seed, hash_string(name));
+  CheckResult res = pairwise_record(r, name);
+  const int64_t j = jumps.load(), jl = live.load();
+  res.details["jump_pairs"] = j;
+  res.details["jump_pairs_with_positive_acceptance"] = jl;
+  res.details["walks"] = counters_json(*counters);
+  res.details["jumps"] = jump_counters_json(*counters);
+  const bool ok = res.passed && jl > 0;
+  res.passed = broken ? !ok && jl > 0 : ok;
+  res.message = fmt::format("glossy.json, gamma {}: {}; {} jump pairs, {} of them with a(x->y) > 0 (jumps attempted {}, "
+                            "projected {}, succeeded {})",
+                            kJumpGamma, res.message, j, jl, snapshot(*counters).jump_attempted,
+                            snapshot(*counters).jump_projected, snapshot(*counters).jump_succeeded);
+  if (jl == 0) res.message += "; NO JUMP PAIR WITH POSITIVE ACCEPTANCE SAMPLED";
+  if (broken) res.message = (res.passed ? "broken variant rejected as required: " : "BROKEN VARIANT NOT DETECTED: ") + res.message;
+  return res;
+}
+
+CheckResult hslt_jump_pairwise(bool broken, const CheckContext& cx, const std::string& name) {
+  const LoadedScene& sc = scene("glossy.json");
+  const auto counters = std::make_shared<HsltCounters>();
+  const HsltMutation hm(sc.ctx, kJumpGamma, counters, false);
+  if (broken) return jump_pairwise_with(cx, name, sc, hm, HsltJumpWithoutGRatio(hm), true, counters);
+  return jump_pairwise_with(cx, name, sc, hm, hm, false, counters);
+}
+
+// log N(d; L L^T) over the 2D blocks (the perturbation density of the sampled target).
+double log_step_density(const std::vector<Eigen::Matrix2d>& L, const Eigen::VectorXd& d) {
+  double s = 0.0;
+  for (size_t r = 0; r < L.size(); ++r) {
+    const Eigen::Vector2d z = L[r].inverse() * d.segment<2>(static_cast<Eigen::Index>(2 * r));
+    s += -std::log(2.0 * kPi * std::abs(L[r].determinant())) - 0.5 * z.squaredNorm();
+  }
+  return s;
+}
+
+// The jump density against the finite-difference Jacobian of the map h* -> y that propose
+// samples: T_fd = N(h* - H(x)) / |det d(y_1 .. y_{k-1}) / d h*|, y_i in orthonormal coordinates of
+// its tangent plane (geometric normal), central differences of jump_predict with step 1e-6.
+CheckResult hslt_jump_density(bool broken, const CheckContext& cx, const std::string& name) {
+  const LoadedScene& sc = scene("glossy.json");
+  const HsltMutation m(sc.ctx, kJumpGamma, nullptr, false);
+  const HsltJumpWithoutGRatio bad(m);
+  const auto start = applicable_start(sc, m);
+  // A pair passes when |T / T_fd - 1| < kTol + 10 e, e = |det(step 4 eps) / det(step eps) - 1| the
+  // differences' own error estimate (near-grazing jumps, G-ratios up to ~1e7, lose accuracy).
+  constexpr double kEps = 1e-6, kTol = 1e-5;
+  const int64_t n = cx.size(200, 2000);
+  struct Out {
+    int jump = 0, fd = 0, zero = 0, fail = 0;
+    int zero_reason = -1;  // 0 structure, 1 the walk converges, 2 replay, 3 not bidirectionally invalid, 4 other
+    double rel = 0, g_lo = 1, g_hi = 1, stated = 0, t_fd = 0;
+    int reverse_positive = 0;  // T(y -> x) > 0: the jump can be accepted
+    double fd_err = 0;
+    int k = 0;
+  };
+  std::vector<Out> out(static_cast<size_t>(n));
+  parallel_for(static_cast<size_t>(n), [&](size_t i) {
+    Rng rng = Rng::for_sample(cx.seed, hash_string(name), i);
+    RngUniforms u(rng);
+    const MltPath x = start(u);
+    if (!m.jump_applicable(x)) return;
+    const std::optional<HsltPath> X = m.hslt_path(x);
+    if (!X) return;
+    const std::vector<Eigen::Matrix2d> L = m.step_factors(x, *X);
+    for (int t = 0; t < 16; ++t) {
+      const Eigen::VectorXd target = m.perturbed_target(*X, L, u);
+      const auto jp = m.jump_predict(x, *X, target);
+      if (!jp || !m.jump_applicable(jp->y) || !m.bidirectionally_invalid(x, jp->y)) continue;
+      const MltPath& y = jp->y;
+      Out& o = out[i];
+      o.jump = 1;
+      const int k = x.segments();
+      o.k = k;
+      const double stated = broken ? bad.density(x, y) : m.density(x, y);
+      const HsltMutation::JumpParts parts = m.jump_parts(x, y);
+      o.g_lo = o.g_hi = parts.g_ratio;
+      o.reverse_positive = m.density(y, x) > 0.0;
+      if (!(stated > 0.0)) {
+        o.zero = 1;
+        o.zero_reason = !parts.structure ? 0 : !parts.replay_lands ? 2 : !parts.bidirectionally_invalid ? 3 : 4;
+        return;
+      }
+      const Eigen::Index dim = 2 * (k - 1);
+      // log |det dy/dh*| by central differences with step eps (nothing at an edge).
+      const auto log_det = [&](double eps) -> std::optional<double> {
+        Eigen::MatrixXd M(dim, dim);
+        for (Eigen::Index j = 0; j < dim; ++j) {
+          std::array<std::optional<HsltMutation::JumpPrediction>, 2> pm;
+          for (int sgn = 0; sgn < 2; ++sgn) {
+            Eigen::VectorXd tt = target;
+            tt[j] += sgn == 0 ? eps : -eps;
+            pm[static_cast<size_t>(sgn)] = m.jump_predict(x, *X, tt);
+            if (!pm[static_cast<size_t>(sgn)]) return std::nullopt;
+            for (int v = 1; v < k; ++v) {
+              const Hit& a = pm[static_cast<size_t>(sgn)]->y.v[static_cast<size_t>(v)].hit;
+              const Hit& b = y.v[static_cast<size_t>(v)].hit;
+              if (a.shape_id != b.shape_id || a.prim_id != b.prim_id) return std::nullopt;  // at an edge
+            }
+          }
+          for (int v = 1; v < k; ++v) {
+            const Hit& h = y.v[static_cast<size_t>(v)].hit;
+            const Vec3 e1 = glm::normalize(h.dpdu - h.ng * glm::dot(h.ng, h.dpdu)), e2 = glm::cross(h.ng, e1);
+            const Vec3 d = (pm[0]->y.v[static_cast<size_t>(v)].hit.p - pm[1]->y.v[static_cast<size_t>(v)].hit.p) / (2 * eps);
+            M(2 * (v - 1), j) = glm::dot(d, e1);
+            M(2 * (v - 1) + 1, j) = glm::dot(d, e2);
+          }
+        }
+        return std::log(std::abs(M.determinant()));
+      };
+      const std::optional<double> ld = log_det(kEps), ld4 = log_det(4 * kEps);
+      if (!ld || !ld4) return;
+      const double log_fd = log_step_density(L, target - hslt_constraints(*X)) - *ld;
+      o.fd = 1;
+      o.stated = stated;
+      o.t_fd = std::exp(log_fd);
+      o.rel = std::abs(std::exp(std::log(stated) - log_fd) - 1.0);
+      // Error estimate of the differences: the change of the determinant between the steps.
+      o.fd_err = std::abs(std::expm1(*ld4 - *ld));
+      o.fail = !(o.rel < kTol + 10.0 * o.fd_err);
+      return;
+    }
+  });
+  int64_t jumps = 0, fd = 0, zero = 0, fail = 0;
+  double worst = 0, g_lo = 1e300, g_hi = 0;
+  std::vector<double> rels;
+  std::array<int64_t, 5> reasons{};
+  int64_t reverse_positive = 0;
+  double max_fd_err = 0;
+  nlohmann::json worst_pairs = nlohmann::json::array();
+  for (const Out& o : out) {
+    if (o.zero_reason >= 0) ++reasons[static_cast<size_t>(o.zero_reason)];
+    reverse_positive += o.reverse_positive;
+    if (o.fail && worst_pairs.size() < 8)
+      worst_pairs.push_back({{"stated", o.stated}, {"t_fd", o.t_fd}, {"g_ratio", o.g_lo}, {"k", o.k}, {"fd_error", o.fd_err}});
+    max_fd_err = std::max(max_fd_err, o.fd_err);
+    jumps += o.jump;
+    fd += o.fd;
+    zero += o.zero;
+    fail += o.fail;
+    if (o.fd) {
+      worst = std::max(worst, o.rel);
+      rels.push_back(o.rel);
+      g_lo = std::min(g_lo, o.g_lo);
+      g_hi = std::max(g_hi, o.g_hi);
+    }
+  }
+  std::sort(rels.begin(), rels.end());
+  const double median = rels.empty() ? 0.0 : rels[rels.size() / 2];
+  CheckResult res;
+  res.statistic_name = "max relative |T / T_fd - 1|";
+  res.statistic = worst;
+  const bool ok = fd >= 20 && zero == 0 && fail == 0;
+  res.passed = broken ? fail > 0 : ok;
+  res.message = fmt::format("{} jumps sampled, {} with a finite-difference Jacobian: max relative |T/T_fd - 1| = {:.3g} "
+                            "(median {:.3g}; {} above {:.0e} + 10 x the differences' error estimate, max estimate {:.2g}), {} stated 0, {} "
+                            "with T(y->x) > 0; G-ratios {:.4g} .. {:.4g}",
+                            jumps, fd, worst, median, fail, kTol, max_fd_err, zero, reverse_positive, g_lo, g_hi);
+  if (broken) res.message = (res.passed ? "broken variant rejected as required: " : "BROKEN VARIANT NOT DETECTED: ") + res.message;
+  res.details = {{"jumps", jumps}, {"finite_difference_pairs", fd}, {"stated_zero", zero}, {"above_tolerance", fail},
+                 {"max_rel", worst}, {"reverse_density_positive", reverse_positive}, {"median_rel", median}, {"g_ratio_min", g_lo}, {"g_ratio_max", g_hi},
+                 {"tolerance", kTol}, {"step", kEps}, {"max_fd_error_estimate", max_fd_err}, {"failed_pairs", worst_pairs},
+                 {"stated_zero_because", {{"structure", reasons[0]}, {"replay", reasons[2]},
+                                          {"not_bidirectionally_invalid", reasons[3]}, {"other", reasons[4]}}}};
+  return res;
+}
+
 void add(const std::string& name, const std::string& desc, CheckKind kind,
          std::function<CheckResult(const CheckContext&, const std::string&)> f) {
   Registry::global().add(
@@ -602,6 +840,21 @@ const bool registered = [] {
   add(p + "image.glossy.missing_jacobian.negative_control",
       "Negative control: the image check must reject the mixture with the half-vector T stated without |det J_area|",
       CheckKind::kStatistical, [](const CheckContext& cx, const std::string& n) { return hslt_image(true, cx, n); });
+  add(p + "jump.pairwise.glossy",
+      "Half-vector mutation with the subspace jump (Sec. 5.2; gamma 1): pi T a symmetric to 1e-9 on seeded glossy "
+      "pairs that include jumps (counted; fails without one)",
+      CheckKind::kDeterministic, [](const CheckContext& cx, const std::string& n) { return hslt_jump_pairwise(false, cx, n); });
+  add(p + "jump.pairwise.glossy.no_g_ratio.negative_control",
+      "Negative control: the acceptance computed with the jump density without the G-ratio (Sec. 5.2) must violate "
+      "pairwise balance against the stated T",
+      CheckKind::kDeterministic, [](const CheckContext& cx, const std::string& n) { return hslt_jump_pairwise(true, cx, n); });
+  add(p + "jump.density",
+      "Subspace jump (Sec. 5.2): stated T_jump against N(h*) / |det dy/dh*| from central differences of the "
+      "prediction-projection map (rel. 1e-5 + 10 x the differences' error estimate) on sampled jumps of the glossy scene",
+      CheckKind::kDeterministic, [](const CheckContext& cx, const std::string& n) { return hslt_jump_density(false, cx, n); });
+  add(p + "jump.density.no_g_ratio.negative_control",
+      "Negative control: the jump density check must reject T_jump stated without the G-ratio of the projection",
+      CheckKind::kDeterministic, [](const CheckContext& cx, const std::string& n) { return hslt_jump_density(true, cx, n); });
   return true;
 }();
 

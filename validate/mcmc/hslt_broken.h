@@ -5,6 +5,8 @@
 //    walk does not return (or reaches another path) are accepted with a positive reverse density;
 //  - hslt_density_without_measure: T without the change of measure (|det J_area| and the Dirac
 //    factors of Eq. 3-7, Eq. 11): the density in h^perp taken for the density in the path measure.
+//  - hslt_jump_density_without_g_ratio, HsltJumpWithoutGRatio: the subspace jump (Sec. 5.2) stated
+//    without the G-ratio of its projection step.
 #pragma once
 
 #include <optional>
@@ -70,6 +72,35 @@ class HsltWithoutMeasure {
   explicit HsltWithoutMeasure(HsltMutation m) : m_(std::move(m)) {}
   std::optional<MltPath> propose(const MltPath& x, Uniforms& u) const { return m_.propose(x, u); }
   double density(const MltPath& x, const MltPath& y) const { return hslt_density_without_measure(m_, x, y); }
+  bool applicable(const MltPath& x) const { return m_.applicable(x); }
+
+ private:
+  HsltMutation m_;
+};
+
+}  // namespace tb::path_space
+
+namespace tb::path_space {
+
+// The subspace jump (Sec. 5.2) with its density stated without the ratio of geometric terms
+// G(y_prev, y_i) / G(y_prev, x'_i) of the projection (the tangent-plane density of the prediction
+// taken for the density on the surface); the regular branch and the proposals unchanged.
+inline double hslt_jump_density_without_g_ratio(const HsltMutation& m, const MltPath& x, const MltPath& y) {
+  const HsltMutation::JumpParts p = m.jump_parts(x, y);
+  if (!p.structure || !p.replay_lands || !p.bidirectionally_invalid) return 0.0;
+  return p.perturbation * p.measure;
+}
+
+class HsltJumpWithoutGRatio {
+ public:
+  using State = MltPath;
+  explicit HsltJumpWithoutGRatio(HsltMutation m) : m_(std::move(m)) {}
+  std::optional<MltPath> propose(const MltPath& x, Uniforms& u) const { return m_.propose(x, u); }
+  double density(const MltPath& x, const MltPath& y) const {
+    const HsltMutation::DensityParts p = m_.density_parts(x, y);
+    if (p.structure && p.forward_lands && p.reverse_lands) return m_.density(x, y);
+    return hslt_jump_density_without_g_ratio(m_, x, y);
+  }
   bool applicable(const MltPath& x) const { return m_.applicable(x); }
 
  private:

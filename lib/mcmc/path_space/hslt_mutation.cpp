@@ -40,13 +40,16 @@ HsltCountsSnapshot snapshot(const HsltCounters& c) {
   s.iterations_all = c.iterations_all.load(kRelaxed);
   s.non_reversible = c.non_reversible.load(kRelaxed);
   s.generated = c.generated.load(kRelaxed);
+  s.jump_attempted = c.jump_attempted.load(kRelaxed);
+  s.jump_projected = c.jump_projected.load(kRelaxed);
+  s.jump_succeeded = c.jump_succeeded.load(kRelaxed);
   return s;
 }
 
 HsltMutation::HsltMutation(const PathContext& ctx, double gamma, std::shared_ptr<HsltCounters> counters, bool stratify,
-                           double image_fraction)
+                           double image_fraction, bool jump)
     : ctx_(&ctx), gamma_(gamma), counters_(counters ? std::move(counters) : std::make_shared<HsltCounters>()),
-      stratify_(stratify), image_fraction_(image_fraction) {
+      stratify_(stratify), image_fraction_(image_fraction), jump_(jump) {
   options_.visibility = true;  // the proposal must be a path with f > 0: no shape between vertices
   options_.side = HsltProjectionSide::kHeuristic;  // Sec. 5.1, Table 2
 }
@@ -265,8 +268,172 @@ HsltMutation::DensityParts HsltMutation::density_parts(const MltPath& x, const M
 
 double HsltMutation::density(const MltPath& x, const MltPath& y) const {
   const DensityParts p = density_parts(x, y);
-  if (!p.structure || !p.forward_lands || !p.reverse_lands) return 0.0;
-  return p.perturbation * p.measure;
+  if (p.structure && p.forward_lands && p.reverse_lands) {
+    // The regular branch is taken only when the first prediction towards h* = H(y) does not jump.
+    if (jump_ && jump_applicable(x)) {
+      const std::optional<HsltPath> X = hslt_path(x);
+      const std::optional<HsltPath> Y = hslt_path(y, &*X);
+      if (jump_preempts(x, *X, hslt_constraints(*Y))) return 0.0;
+    }
+    return p.perturbation * p.measure;
+  }
+  // Sec. 5.2: the two branches are exclusive (the jump needs both landings to fail).
+  return jump_ ? jump_density(x, y) : 0.0;
+}
+
+std::optional<MltPath> HsltMutation::jump_proposal(const MltPath& x, const HsltPath& X, const Eigen::VectorXd& target) const {
+  std::optional<JumpPrediction> jp = jump_predict(x, X, target);
+  if (!jp || !jump_applicable(jp->y) || !bidirectionally_invalid(x, jp->y)) return std::nullopt;
+  return std::move(jp->y);
+}
+
+bool HsltMutation::jump_preempts(const MltPath& x, const HsltPath& X, const Eigen::VectorXd& target) const {
+  return jump_proposal(x, X, target).has_value();
+}
+
+bool HsltMutation::jump_applicable(const MltPath& x) const {
+  if (!applicable(x)) return false;
+  for (int i = 1; i < x.segments(); ++i)
+    if (is_dirac_surface(x.v[static_cast<size_t>(i)])) return false;
+  return true;
+}
+
+namespace {
+
+// Unit normal of the tangent plane of an HsltVertex (the plane the predictor moves on).
+Vec3 tangent_plane_normal(const HsltVertex& v) { return glm::normalize(glm::cross(v.dpdu, v.dpdv)); }
+
+// |cos| / d^2 at the receiving point b of a ray from a (the solid-angle-to-area factor; the
+// cosine at a cancels in the ratio of Sec. 5.2).
+double receiving_g(const Vec3& a, const Vec3& b, const Vec3& nb) {
+  const Vec3 d = b - a;
+  const double l2 = glm::dot(d, d);
+  return std::abs(glm::dot(nb, d)) / (std::sqrt(l2) * l2);
+}
+
+}  // namespace
+
+std::optional<HsltMutation::JumpPrediction> HsltMutation::jump_predict(const MltPath& x, const HsltPath& X,
+                                                                        const Eigen::VectorXd& target) const {
+  const int k = X.segments();
+  const HsltBlocks b = hslt_constraint_blocks(X);
+  const HsltBlockLu lu(b);
+  if (!lu.ok()) return std::nullopt;
+  // The walk's first predictor step (hslt_walk.cpp, lambda = 1): Delta = -J^{-1} (H(X) - h*).
+  const Eigen::VectorXd F = hslt_constraints(X) - target;
+  const Eigen::VectorXd delta = -lu.solve(F);
+  if (!delta.allFinite()) return std::nullopt;
+  JumpPrediction jp;
+  jp.y = x;
+  jp.predicted.assign(X.vertices.size(), Vec3(0.0));
+  for (int i = 1; i < k; ++i) {
+    const HsltVertex& v = X.vertices[static_cast<size_t>(i)];
+    const Eigen::Index c = 2 * (i - 1);
+    jp.predicted[static_cast<size_t>(i)] = v.p + v.dpdu * delta[c] + v.dpdv * delta[c + 1];
+  }
+  jp.from_start = !(hslt_projection_side_ratio(b) < 1.0);  // the walk's heuristic side (Table 2)
+  const Scene& scene = ctx_->world->geometry();
+  for (int step = 1; step < k; ++step) {
+    const int i = jp.from_start ? step : k - step;
+    const int prev = jp.from_start ? i - 1 : i + 1;
+    const Vec3 o = jp.y.v[static_cast<size_t>(prev)].hit.p;
+    const Vec3 d = jp.predicted[static_cast<size_t>(i)] - o;
+    const double len = glm::length(d);
+    if (!(len > 0) || !std::isfinite(len)) return std::nullopt;
+    const Ray ray{o, d / len, 1e-5 * std::max(1.0, glm::length(o)), kInfinity};
+    const std::optional<Hit> hit = scene.intersect(ray);
+    if (!hit) return std::nullopt;
+    // Grazing rays (a previous vertex on the tangent plane of x_i, e.g. two vertices on one plane):
+    // G ~ 0, and x'_i is not recoverable from the pair; rejected here and hence in the density.
+    if (!(std::abs(glm::dot(ray.d, tangent_plane_normal(X.vertices[static_cast<size_t>(i)]))) >= kJumpMinCos) ||
+        !(std::abs(glm::dot(ray.d, hit->ng)) >= kJumpMinCos))
+      return std::nullopt;
+    PathVertex pv = surface_vertex(*ctx_, *hit);
+    if (!pv.is_surface() || pv.bsdf == nullptr) return std::nullopt;
+    jp.y.v[static_cast<size_t>(i)] = std::move(pv);
+  }
+  const int a = jp.from_start ? k - 1 : 1, e = jp.from_start ? k : 0;
+  const Vec3 pa = jp.y.v[static_cast<size_t>(a)].hit.p, pe = jp.y.v[static_cast<size_t>(e)].hit.p;
+  const double len = glm::length(pe - pa);
+  if (!(len > 0)) return std::nullopt;
+  const Ray closing{pa, (pe - pa) / len, 1e-5 * std::max(1.0, glm::length(pa)), len * (1 - 1e-6)};
+  if (scene.occluded(closing)) return std::nullopt;
+  return jp;
+}
+
+bool HsltMutation::bidirectionally_invalid(const MltPath& x, const MltPath& y) const {
+  const std::optional<HsltPath> X = hslt_path(x);
+  const std::optional<HsltPath> Yx = X ? hslt_path(y, &*X) : std::nullopt;
+  if (X && Yx && lands(*X, *Yx)) return false;
+  const std::optional<HsltPath> Y = hslt_path(y);
+  const std::optional<HsltPath> Xy = Y ? hslt_path(x, &*Y) : std::nullopt;
+  return !(Y && Xy && lands(*Y, *Xy));
+}
+
+HsltMutation::JumpParts HsltMutation::jump_parts(const MltPath& x, const MltPath& y) const {
+  JumpParts p;
+  const int k = x.segments();
+  if (y.segments() != k || !jump_applicable(x) || !jump_applicable(y)) return p;
+  if (!same_vertex(x.v[0], y.v[0]) || !same_vertex(x.v[static_cast<size_t>(k)], y.v[static_cast<size_t>(k)])) return p;
+  const std::optional<HsltPath> X = hslt_path(x);
+  if (!X) return p;
+  const HsltBlocks b = hslt_constraint_blocks(*X);
+  const bool from_start = !(hslt_projection_side_ratio(b) < 1.0);
+  // x'_i: the line y_prev -> y_i meets the tangent plane of x_i (the inverse of the ray cast).
+  Eigen::VectorXd duv(2 * (k - 1));
+  double log_g = 0.0;
+  for (int step = 1; step < k; ++step) {
+    const int i = from_start ? step : k - step;
+    const int prev = from_start ? i - 1 : i + 1;
+    const HsltVertex& v = X->vertices[static_cast<size_t>(i)];
+    const Vec3 o = y.v[static_cast<size_t>(prev)].hit.p, yi = y.v[static_cast<size_t>(i)].hit.p;
+    const Vec3 nt = tangent_plane_normal(v);
+    const Vec3 d = yi - o;
+    const double den = glm::dot(d, nt);
+    if (!(std::abs(den) > 0)) return p;
+    const double t = glm::dot(v.p - o, nt) / den;
+    if (!(t > 0) || !std::isfinite(t)) return p;
+    const Vec3 xp = o + d * t;
+    const Vec3 r = xp - v.p;
+    const double g11 = glm::dot(v.dpdu, v.dpdu), g12 = glm::dot(v.dpdu, v.dpdv), g22 = glm::dot(v.dpdv, v.dpdv);
+    const double det = g11 * g22 - g12 * g12;
+    if (!(det > 0)) return p;
+    const double ru = glm::dot(r, v.dpdu), rv = glm::dot(r, v.dpdv);
+    duv[2 * (i - 1)] = (g22 * ru - g12 * rv) / det;
+    duv[2 * (i - 1) + 1] = (g11 * rv - g12 * ru) / det;
+    // Sec. 5.2, second equation: G(y_prev, y_i) / G(y_prev, x'_i) (area of the surface at y_i,
+    // geometric normal; area of the tangent plane at x'_i).
+    log_g += std::log(receiving_g(o, yi, y.v[static_cast<size_t>(i)].hit.ng)) - std::log(receiving_g(o, xp, nt));
+  }
+  const Eigen::VectorXd dh = hslt_dense_jacobian(b) * duv;
+  p.target = hslt_constraints(*X) + dh;
+  const std::vector<Eigen::Matrix2d> L = step_factors(x, *X);
+  double log_n = 0.0;
+  for (size_t r = 0; r < L.size(); ++r) {
+    const Eigen::Vector2d z = L[r].inverse() * dh.segment<2>(static_cast<Eigen::Index>(2 * r));
+    log_n += -std::log(2.0 * kPi * std::abs(L[r].determinant())) - 0.5 * z.squaredNorm();
+  }
+  p.structure = true;
+  p.perturbation = std::exp(log_n);
+  p.measure = measure_factor(*X, std::vector<bool>(L.size(), false));
+  p.g_ratio = std::exp(log_g);
+  if (!(p.perturbation > 0) || !(p.measure > 0) || !std::isfinite(p.g_ratio)) return p;
+  const std::optional<JumpPrediction> jp = jump_predict(x, *X, p.target);
+  if (!jp) return p;
+  double dist = 0.0;
+  for (int i = 1; i < k; ++i)
+    dist = std::max(dist, glm::length(jp->y.v[static_cast<size_t>(i)].hit.p - y.v[static_cast<size_t>(i)].hit.p));
+  p.replay_lands = dist < kLandingTolerance;
+  if (!p.replay_lands) return p;
+  p.bidirectionally_invalid = bidirectionally_invalid(x, y);
+  return p;
+}
+
+double HsltMutation::jump_density(const MltPath& x, const MltPath& y) const {
+  const JumpParts p = jump_parts(x, y);
+  if (!p.structure || !p.replay_lands || !p.bidirectionally_invalid) return 0.0;
+  const double t = p.perturbation * p.measure * p.g_ratio;
+  return std::isfinite(t) ? t : 0.0;
 }
 
 std::optional<MltPath> HsltMutation::propose(const MltPath& x, Uniforms& u) const {
@@ -283,6 +450,20 @@ std::optional<MltPath> HsltMutation::propose(const MltPath& x, Uniforms& u) cons
   c.proposals.fetch_add(1, kRelaxed);
   // Fig. 12: mutate_half_vectors (Sec. 6.1), h_to_positions (Sec. 5), reverse check (Sec. 5.2).
   const Eigen::VectorXd target = perturbed_target(*X, step_factors(x, *X), u);
+  // Sec. 5.2: the subspace jump from the walk's first prediction, taken when the prediction is a
+  // valid path and the pair is bidirectionally invalid (a condition on the pair alone).
+  if (jump_ && jump_applicable(x)) {
+    c.jump_attempted.fetch_add(1, kRelaxed);
+    std::optional<JumpPrediction> jp = jump_predict(x, *X, target);
+    if (jp && jump_applicable(jp->y)) {
+      c.jump_projected.fetch_add(1, kRelaxed);
+      if (bidirectionally_invalid(x, jp->y)) {
+        c.jump_succeeded.fetch_add(1, kRelaxed);
+        c.generated.fetch_add(1, kRelaxed);
+        return std::move(jp->y);
+      }
+    }
+  }
   const HsltWalkResult r = walk(*X, target);
   c.forward_status[static_cast<size_t>(r.status)].fetch_add(1, kRelaxed);
   c.iterations_all.fetch_add(r.iterations, kRelaxed);
@@ -300,13 +481,15 @@ std::optional<MltPath> HsltMutation::propose(const MltPath& x, Uniforms& u) cons
 }
 
 PathMutationList make_hslt_mixture(const PathContext& ctx, const PathMutationSettings& s,
-                                   const std::shared_ptr<HsltCounters>& counters, double gamma, bool stratify) {
+                                   const std::shared_ptr<HsltCounters>& counters, double gamma, bool stratify,
+                                   bool jump) {
   const PathMutationInfo* bidir = find_path_mutation("bidirectional");
   const PathMutationInfo* hslt = find_path_mutation("hslt");
   PathMutationList out;
   out.push_back(bidir->make(ctx, s, bidir->weight));
   out.push_back(std::make_shared<const PathProposalMutation<HsltMutation>>(
-      "hslt", hslt->weight, HsltMutation(ctx, gamma, counters, stratify), hslt_applies));
+      "hslt", hslt->weight, HsltMutation(ctx, gamma, counters, stratify, HsltMutation::kImageFraction, jump),
+      hslt_applies));
   return out;
 }
 
@@ -324,9 +507,10 @@ int64_t render_hslt(const World& world, const RenderSettings& settings, Film& fi
   };
   const double gamma = param("gamma", HsltMutation::kDefaultGamma);
   const bool stratify = param("stratify", 1.0) != 0.0;
+  const bool jump = param("jump", HsltMutation::kDefaultJump ? 1.0 : 0.0) != 0.0;
   if (!(gamma > 0.0)) throw std::invalid_argument("hslt: parameter 'gamma' must be > 0");
-  o.mutations = [counters, gamma, stratify](const PathContext& ctx, const PathMutationSettings& s) {
-    return make_hslt_mixture(ctx, s, counters, gamma, stratify);
+  o.mutations = [counters, gamma, stratify, jump](const PathContext& ctx, const PathMutationSettings& s) {
+    return make_hslt_mixture(ctx, s, counters, gamma, stratify, jump);
   };
   const MltStats stats = run_mlt(world, settings, film, o);
   fill_report(stats, settings.report);
@@ -345,6 +529,11 @@ int64_t render_hslt(const World& world, const RenderSettings& settings, Film& fi
              c.proposals, c.not_applicable, c.iterations_per_converged(), c.iterations_per_walk(),
              100.0 * c.generation_rate(), c.non_reversible, 100.0 * c.non_reversible_fraction(), 100.0 * acc_generated, 100.0 * acc,
              stats.mutations_per_second());
+  // Table 3 "Submanifold jump" (Sec. 5.2).
+  fmt::print("hslt subspace jumps (Sec. 5.2, {}): {} attempted (proposals on paths without a specular vertex), {} first "
+             "predictions projected to a valid path, {} succeeded (bidirectionally invalid, proposed as jumps) = {:.2f}% of the "
+             "attempted\n",
+             jump ? "on" : "off", c.jump_attempted, c.jump_projected, c.jump_succeeded, 100.0 * c.jump_success_rate());
   return stats.chains;
 }
 
