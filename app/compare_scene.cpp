@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "app/compare_metrics.h"
+#include "app/mpi_world.h"
 #include "app/progress.h"
 #include "app/scene_loading.h"
 #include "lib/core/atomic_file.h"
@@ -208,6 +209,7 @@ int cmd_compare_scene(const CompareSceneArgs& a, const std::atomic<bool>* interr
                           {"budget_s", budget}, {"seed", seed},        {"max_depth", max_depth},
                           {"passes", kOpenEndedPasses}, {"pass_spp", pass_spp(integ)}};
   };
+  if (mpi::world().rank == 0)
   fmt::print("tb compare: {} at {}x{}, integrators {}, checkpoints {} s (independent runs), seed {}, {} threads "
              "({} hardware threads)\n",
              a.scene, W, H, join(a.integrators, ","), join([&] {
@@ -221,6 +223,72 @@ int cmd_compare_scene(const CompareSceneArgs& a, const std::atomic<bool>* interr
   std::string ref_path = a.reference;
   const bool ref_rendered = ref_path.empty();
   const double ref_budget = kReferenceBudgetFactor * a.time_s;
+
+  // Under mpirun (docs/compare.md, "Under mpirun"): the renders (the reference when it is rendered,
+  // then every integrator x checkpoint) are work items dealt round-robin to the ranks; each rank
+  // renders its items exactly as one process would (same settings, seeds and keys) and the ranks
+  // other than 0 send the files (EXR and JSON record) to rank 0, which writes them into DIR/ and
+  // then runs the one-process comparison with --resume on: every item found is reloaded, an item
+  // lost on its rank (an error) is rendered again by rank 0.
+  bool resume = a.resume;
+  const mpi::World& mw = mpi::world();
+  if (mw.size > 1) {
+    struct Item {
+      const IntegratorInfo* info;
+      std::string name, stem, label;
+      double budget;
+      uint64_t seed;
+    };
+    std::vector<Item> items;
+    if (ref_rendered)
+      items.push_back({find_integrator(kReferenceIntegrator), kReferenceIntegrator, (fs::path(out) / "reference").string(),
+                       fmt::format("reference {} {:g} s", kReferenceIntegrator, ref_budget), ref_budget,
+                       hash_values(a.seed, hash_string("reference"))});
+    for (size_t ii = 0; ii < infos.size(); ++ii)
+      for (size_t k = 0; k < budgets.size(); ++k)
+        items.push_back({infos[ii], infos[ii]->name,
+                         (fs::path(out) / "runs" / fmt::format("{}-{}", infos[ii]->name, k)).string(),
+                         fmt::format("{} {:g} s ({}/{})", infos[ii]->name, budgets[k], k + 1, budgets.size()), budgets[k],
+                         hash_values(a.seed, hash_string(infos[ii]->name), uint64_t(k))});
+    nlohmann::json files = nlohmann::json::array();  // [stem, exr bytes, json bytes] of this rank's items
+    ProgressLine rank_line(!a.no_progress && isatty(STDERR_FILENO) && mw.rank == 0);
+    int done = 0, lost = 0;
+    for (size_t j = static_cast<size_t>(mw.rank); j < items.size(); j += static_cast<size_t>(mw.size)) {
+      const Item& it = items[j];
+      const RenderSettings st = settings_for(it.name, it.budget, it.seed);
+      try {
+        const auto r = render_run(*world, *it.info, st, it.stem, key_of(it.name, it.budget, st.seed), a.resume, rank_line,
+                                  it.label, interrupted);
+        if (!r) break;  // interrupted
+        ++done;
+        if (mw.rank != 0) {
+          const std::string exr = read_file(it.stem + ".exr");
+          files.push_back({it.stem, nlohmann::json::binary(std::vector<uint8_t>(exr.begin(), exr.end())),
+                           read_file(it.stem + ".json")});
+        }
+      } catch (const std::exception& e) {
+        ++lost;
+        fmt::print(stderr, "tb compare: rank {}: {} failed ({}); rank 0 renders it again\n", mw.rank, it.label, e.what());
+      }
+    }
+    const std::vector<uint8_t> packed = nlohmann::json::to_cbor(nlohmann::json{{"files", files}, {"done", done}, {"lost", lost}});
+    const std::vector<std::string> parts = mpi::gather(std::string(packed.begin(), packed.end()));
+    if (mw.rank != 0) return 0;  // rank 0's exit status is the run's (mpirun reports a non-zero one)
+    int total_done = done, total_lost = lost;
+    for (size_t r = 1; r < parts.size(); ++r) {
+      const nlohmann::json part = nlohmann::json::from_cbor(parts[r]);
+      total_done += part.at("done").get<int>();
+      total_lost += part.at("lost").get<int>();
+      for (const auto& f : part.at("files")) {
+        const auto& bytes = f.at(1).get_binary();
+        write_file_atomic(f.at(0).get<std::string>() + ".exr", std::string(bytes.begin(), bytes.end()));
+        write_file_atomic(f.at(0).get<std::string>() + ".json", f.at(2).get<std::string>());
+      }
+    }
+    fmt::print("under mpirun: {} renders over {} ranks ({} done, {} lost and rendered again on rank 0)\n", items.size(),
+               mw.size, total_done, total_lost);
+    resume = true;
+  }
   if (ref_rendered) {
     ref_path = (fs::path(out) / "reference.exr").string();
     fmt::print("No --reference given: rendering a {} reference for {} x S = {:g} s to {} (its own noise, the rRMSE_ref "
@@ -230,7 +298,7 @@ int cmd_compare_scene(const CompareSceneArgs& a, const std::atomic<bool>* interr
         settings_for(kReferenceIntegrator, ref_budget, hash_values(a.seed, hash_string("reference")));
     const auto r = render_run(*world, *find_integrator(kReferenceIntegrator), st,
                               (fs::path(out) / "reference").string(), key_of(kReferenceIntegrator, ref_budget, st.seed),
-                              a.resume, line, fmt::format("reference {} {:g} s", kReferenceIntegrator, ref_budget),
+                              resume, line, fmt::format("reference {} {:g} s", kReferenceIntegrator, ref_budget),
                               interrupted);
     if (!r) {
       fmt::print("interrupted while rendering the reference (rerun with --resume to continue)\n");
@@ -267,7 +335,7 @@ int cmd_compare_scene(const CompareSceneArgs& a, const std::atomic<bool>* interr
       std::optional<Run> r;
       try {
         r = render_run(*world, *infos[ii], st, (fs::path(out) / "runs" / fmt::format("{}-{}", res.name, k)).string(),
-                       key_of(res.name, budgets[k], st.seed), a.resume, line,
+                       key_of(res.name, budgets[k], st.seed), resume, line,
                        fmt::format("{} {:g} s ({}/{})", res.name, budgets[k], k + 1, budgets.size()), interrupted);
       } catch (const std::exception& e) {
         line.finish();
