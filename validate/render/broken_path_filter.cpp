@@ -15,8 +15,11 @@ struct OmitQueryWeights {
 
 FilteringWeight pf1_weight_omitting_query(std::span<const double> column, int own, int query, double classical) {
   FilteringWeight w = pf1_mmis_weight(column, own, classical);
-  w.denominator -= column[static_cast<size_t>(query)];
-  w.weight = safe_ratio(w.own_pdf, w.denominator);
+  double den = classical;  // the Eq. 14 sum (K = 1) over the members other than the query
+  for (size_t j = 0; j < column.size(); ++j)
+    if (static_cast<int>(j) != query) den += column[j];
+  w.denominator = den;
+  w.weight = den > 0 ? w.own_pdf / den : 0.0;  // a query alone in its kernel then counts nothing
   return w;
 }
 
