@@ -90,7 +90,9 @@ inline void pf1_trace_prefixes(const World& world, const RenderSettings& st, con
       const SurfaceScatter scatter(pr.hit, *surf->bsdf);
       const auto bs = scatter.sample(pr.wo, u[BounceDim::kBsdfLobe], {u[BounceDim::kBsdfU], u[BounceDim::kBsdfV]},
                                      TransportMode::kRadiance);
-      if (bs && !bs->is_delta() && bs->pdf > 0 && !is_black(bs->weight)) {
+      // Kept even where f at y_j is 0 (e.g. below the geometric surface of a shading-normal frame): the
+      // technique's density p_j, which every denominator evaluates with SurfaceScatter::pdf, includes them.
+      if (bs && !bs->is_delta() && bs->pdf > 0) {
         pr.wi = bs->wi;
         pr.has_dir = true;
       }
