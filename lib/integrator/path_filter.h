@@ -21,7 +21,7 @@
 //     D_i(w_k) = sum_{j in K_i} p_j(w_k),
 // and the pixel estimate of query i is (camera weight W_i)
 //     I_i = W_i [ Le(x_1 -> camera) + sum_{k in K_i} f_i(wo_i, w_k) |w_k . n_s| L^_ik / D_i(w_k) ]
-// (without next-event estimation at x_1; with it, below),
+// (written without the next-event estimation at x_1 that is added below),
 // i.e. the weight of the output path of member k under its own technique is p_k(w_k) / D_i(w_k)
 // (balance heuristic), and the weights of all the techniques of K_i that can produce that output path
 // sum to one. Unbiased: conditioned on all prefixes (which fix every kernel), the w_k are independent
