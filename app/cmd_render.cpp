@@ -20,6 +20,7 @@
 #include "lib/film/exr_io.h"
 #include "lib/film/pass_tiles.h"
 #include "lib/film/png_preview.h"
+#include "lib/integrator/path_filter.h"
 #include "lib/mcmc/path_space/ramlt.h"
 #include "lib/registry/integrator_registry.h"
 #include "lib/scene/scene_loader.h"
@@ -293,6 +294,13 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     if (errors > 0)
       fmt::print("{} proposed moves with a stated forward density of 0 or non-finite Hastings terms (never accepted): "
                  "a mutation misstates its density\n", errors);
+  }
+  if (a.integrator == "pf1") {
+    const Pf1Timing t = pf1_last_timing();
+    if (t.passes > 0)
+      fmt::print("pf1: {:.3f} s per pass in the prefix pass, {:.3f} s per pass filtering (kernels, weights, suffixes); "
+                 "mean kernel {:.2f} prefixes\n",
+                 t.prefix_seconds / double(t.passes), t.filter_seconds / double(t.passes), t.mean_members);
   }
   if (film.nonfinite().count() > 0)
     fmt::print("{} (replay: tb render {} --integrator {} --seed {})\n", film.nonfinite().summary(), a.scene,

@@ -78,8 +78,10 @@ class PathTracer {
   // the render loop), so that next() is a direct, inlined call there. Vertices are lean
   // SurfacePoints: the path tracer never needs the derivatives of a Hit.
   // With `rec`, every contribution is also recorded as its own path (pt_sample_paths).
+  // With skip_first_emission, emission found by the ray itself (its first hit, or the environment
+  // when it misses) is left out: the caller weights it (pf1, path_filter_impl.h).
   template <class U>
-  Rgb li(Ray ray, U& rng, RayCounts& counts, PathRecorder* rec = nullptr) const {
+  Rgb li(Ray ray, U& rng, RayCounts& counts, PathRecorder* rec = nullptr, bool skip_first_emission = false) const {
     const Scene& scene = world_.geometry();
     Rgb L(0.0), beta(1.0);
     bool count_emission_fully = true;  // camera ray, or the last bounce was a delta lobe
@@ -89,6 +91,7 @@ class PathTracer {
     for (int depth = 0;; ++depth) {
       ++counts.extension;
       if (!scene.intersect_point(ray, &hit)) {
+        if (depth == 0 && skip_first_emission) break;
         for (const Light* env : world_.infinite_lights()) {
           const Rgb le = env->le(Vec3(0.0), ray.d);
           if (is_black(le)) continue;
@@ -100,7 +103,7 @@ class PathTracer {
       }
       const SurfaceInfo& surf = world_.surface(hit.shape_id);
       const Vec3 wo = -ray.d;
-      if (surf.emitter) {
+      if (surf.emitter && !(depth == 0 && skip_first_emission)) {
         const Rgb le = surf.emitter->le(hit.n, wo);
         if (!is_black(le)) {
           const Rgb c = beta * le * emission_weight(count_emission_fully, prev_pdf_bsdf, surf.emitter, prev_p, ray.d, &hit);

@@ -7,6 +7,7 @@
 #include "lib/integrator/bdpt.h"
 #include "lib/integrator/light_tracer.h"
 #include "lib/integrator/path_tracer.h"
+#include "lib/integrator/path_filter.h"
 #include "lib/integrator/photon_map.h"
 #include "lib/mcmc/path_space/hslt_mutation.h"
 #include "lib/mcmc/path_space/mlt.h"
@@ -52,6 +53,12 @@ std::vector<IntegratorParameter> mlt_stratified_parameters() {
 std::vector<IntegratorParameter> photon_map_parameters(bool progressive) {
   std::vector<IntegratorParameter> out;
   for (const auto& [name, description] : photon_map_parameter_list(progressive)) out.push_back({name, description});
+  return out;
+}
+
+std::vector<IntegratorParameter> pf1_parameters() {
+  std::vector<IntegratorParameter> out;
+  for (const auto& [name, description] : pf1_parameter_list()) out.push_back({name, description});
   return out;
 }
 
@@ -136,6 +143,8 @@ const std::vector<IntegratorInfo>& integrators() {
          [](const World& w, const RenderSettings& s, Film& f) { return render_pm(w, s, f); }, photon_map_parameters(false)},
         {"sppm", "stochastic progressive photon mapping (Hachisuka & Jensen 2009): per-pixel radius reduction, one pass = one run",
          [](const World& w, const RenderSettings& s, Film& f) { return render_sppm(w, s, f); }, photon_map_parameters(true)},
+        {"pf1", "single-vertex path filtering as unbiased marginal MIS (West et al. 2022, Sec. 5, K = 1): directions of neighbouring prefixes reused at the first camera vertex",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_pf1(w, s, f); }, pf1_parameters()},
         {"pt", "path tracing with next-event estimation, MIS (power heuristic) and Russian roulette",
          [](const World& w, const RenderSettings& s, Film& f) { return render_pt(w, s, f); }},
     };

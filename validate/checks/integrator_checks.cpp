@@ -265,9 +265,11 @@ std::shared_ptr<const RenderRun> scene_reference(const CheckContext& ctx, const 
   return run;
 }
 
+// `control_name`: a broken variant found by find_render_function under that name (e.g. "pf1~mmis_omits_query")
+// instead of a broken estimator term.
 CheckResult run_agreement(const CheckContext& ctx, const SceneCase& sc, const std::string& integrator,
-                          std::optional<EstimatorFault> fault = std::nullopt) {
-  const bool control = fault.has_value();
+                          std::optional<EstimatorFault> fault = std::nullopt, const std::string& control_name = "") {
+  const bool control = fault.has_value() || !control_name.empty();
   const ImageSize& sz = ctx.full ? sc.full : sc.quick;
   const auto world = load_scene_at_resolution(sc.file, sz.resolution, sz.resolution);
   const std::string what = fmt::format("{} vs bdpt reference on {} ({}x{})", integrator, sc.key, sz.resolution,
@@ -278,16 +280,21 @@ CheckResult run_agreement(const CheckContext& ctx, const SceneCase& sc, const st
   // BSDF sampling into a small light: unbiased (measured: glossy 12x12 at 16k spp, image sum pt
   // 16.683 +- 0.034 vs bdpt 16.680 +- 0.014) but so heavy-tailed at 128 spp that its typical
   // image is darker than its mean and the t-test rejects. It is cheap: 16x the samples.
-  const int64_t factor = integrator == "pt" ? 16 : sample_factor(integrator);
+  // pf1 shares pt's next-event estimation and path tracing beyond its filtered vertex: the same 16x.
+  const int64_t factor = integrator == "pt" || integrator == "pf1" ? 16 : sample_factor(integrator);
   RenderSettings st = settings_for(ctx, sc.quick, sc.full, kSceneMaxDepth, what, factor);
-  const RenderRun run = render_with(control ? broken_integrator_name(integrator, *fault) : integrator, *world, st);
+  const RenderRun run = render_with(!control_name.empty() ? control_name
+                                    : control             ? broken_integrator_name(integrator, *fault)
+                                                          : integrator,
+                                    *world, st);
   if (!run.ok()) return render_error_record(run, what);
   WelchImage a = run.film->welch(), b = ref->film->welch();
   int64_t excluded = 0;
   std::vector<bool> mask;
   if (integrator == "lt") mask = shiny_first_hit_pixels(*world, kLtMinRoughness);
   // Path tracing: pixels that receive a caustic directly or see one through the glass.
-  if (integrator == "pt") mask = mask_union(caustic_receiver_pixels(*world), shiny_first_hit_pixels(*world));
+  if (integrator == "pt" || integrator == "pf1")
+    mask = mask_union(caustic_receiver_pixels(*world), shiny_first_hit_pixels(*world));
   // bdpt: a caustic seen through the glass (eye - S - S - D - S - S - light) has no connectable
   // pair of vertices and is sampled by s = 0 alone, heavy-tailed in test and reference alike
   // (measured at full size: single pixels at t = -5.7 behind the glass sphere).
@@ -309,13 +316,14 @@ CheckResult run_agreement(const CheckContext& ctx, const SceneCase& sc, const st
   r.samples = st.spp * run.film->pixel_count();
   r.details["render"] = run.summary();
   r.details["reference"] = ref->summary();
-  r.details["fault"] = control ? fault_name(*fault) : "none";
+  r.details["fault"] = fault ? fault_name(*fault) : control ? control_name : "none";
   r.details["excluded_pixels"] = excluded;
   r.details["settings"] = {{"spp", st.spp}, {"passes", st.passes}, {"max_depth", st.max_depth}, {"seed", st.seed}};
   if (excluded > 0)
     r.message += fmt::format(" [{} pixels excluded: {}]", excluded,
                              integrator == "lt"   ? "first hit delta or near-specular"
-                             : integrator == "pt" ? "first hit is delta or sees a light through a delta surface"
+                             : integrator == "pt" || integrator == "pf1"
+                                 ? "first hit is delta or sees a light through a delta surface"
                                                   : "first hit is delta");
   if (run.nonfinite() + ref->nonfinite() > 0) {
     r.passed = false;
@@ -612,6 +620,19 @@ const bool registered = [] {
            .kind = CheckKind::kStatistical,
            .run = [](const CheckContext& c) {
              return run_agreement(c, scene_cases()[0], "pt", EstimatorFault::kNeeNoCosine);
+           }});
+  // pf1 (single-vertex path filtering, docs/mmis-paths.md) on the Cornell box only.
+  reg.add({.name = "integrator.agreement.cornell.pf1",
+           .description = "pf1 (single-vertex path filtering, unbiased MMIS) agrees with a longer bdpt reference on "
+                          "cornell-box.json (tiled Welch t, Šidák; Stouffer; sum z^2), alpha 0.01",
+           .kind = CheckKind::kStatistical,
+           .run = [](const CheckContext& c) { return run_agreement(c, scene_cases()[0], "pf1"); }});
+  reg.add({.name = "integrator.agreement.control.pf1_mmis_omits_query",
+           .description = "negative control: pf1 whose MMIS denominator omits the query's own prefix must be "
+                          "rejected against the bdpt reference on cornell-box.json, alpha 0.01",
+           .kind = CheckKind::kStatistical,
+           .run = [](const CheckContext& c) {
+             return run_agreement(c, scene_cases()[0], "pf1", std::nullopt, "pf1~mmis_omits_query");
            }});
   reg.add({.name = "integrator.agreement.control.lt_shading_correction_inverted",
            .description = "negative control: lt with the reciprocal of the adjoint BSDF's shading-normal factor "

@@ -1,4 +1,5 @@
 #include "validate/render/broken_integrators.h"
+#include "validate/render/broken_path_filter.h"
 
 #include "lib/integrator/bdpt_impl.h"
 #include "lib/integrator/light_tracer_impl.h"
@@ -94,6 +95,7 @@ RenderFunction find_render_function(const std::string& name) {
   const size_t tilde = name.find('~');
   if (tilde == std::string::npos) return {};
   if (auto pm = broken_photon_map(name.substr(0, tilde), name.substr(tilde + 1))) return pm;
+  if (auto pf = broken_path_filter(name.substr(0, tilde), name.substr(tilde + 1))) return pf;
   for (const EstimatorFault f : kAllFaults)
     if (name.substr(tilde + 1) == fault_name(f)) return broken_integrator(name.substr(0, tilde), f);
   return {};
