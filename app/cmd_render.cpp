@@ -257,9 +257,10 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
                         {"nonfinite_samples", nonfinite},
                         {"mpi_ranks", mw.size},
                         {"pass_tiles", tiles_path},
-                        // MCMC: one chain's splats spread over the image, so pixels of a pass are dependent
-                        // and tb compare decides on the pass-tile test (docs/compare.md).
-                        {"pixels_dependent_within_pass", !report.mutations.empty() || ramlt},
+                        // MCMC: one chain's splats spread over the image; pf1: a kernel reuses its
+                        // neighbours' directions. Pixels of a pass are dependent, and tb compare decides on
+                        // the pass-tile test (docs/integrator.md).
+                        {"pixels_dependent_within_pass", !report.mutations.empty() || ramlt || a.integrator == "pf1"},
                         {"interrupted", interrupted && interrupted->load()},
                         {"scene_description", world->description()}};
   if (!report.mutations.empty()) {
