@@ -194,8 +194,10 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     h["mutations"] = nlohmann::json::array();
     for (const auto& m : report.mutations) h["mutations"].push_back({m.name, m.proposed, m.accepted, m.errors});
     const std::vector<std::string> parts = mpi::gather(pack_part(h, my_passes));
-    if (mw.rank != 0) return mpi::broadcast(0);
-    try {
+    // Rank 0's exit status is the run's (mpirun reports a non-zero one); the other ranks are done, so
+    // nothing after this point can leave them waiting on rank 0.
+    if (mw.rank != 0) return 0;
+    {
       const size_t px = welch.pixels();
       for (size_t r = 1; r < parts.size(); ++r) {
         const RankPart part = unpack_part(parts[r]);
@@ -225,9 +227,6 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
           it->errors += m.at(3).get<int64_t>();
         }
       }
-    } catch (...) {
-      mpi::broadcast(1);
-      throw;
     }
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -309,7 +308,7 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   if (nonfinite > film.nonfinite().count())
     fmt::print("{} more non-finite samples rejected on the other ranks\n", nonfinite - film.nonfinite().count());
   if (distributed) fmt::print("{} ranks under mpirun\n", mw.size);
-  return mpi::broadcast(0);
+  return 0;
 }
 
 }  // namespace tb
