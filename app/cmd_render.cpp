@@ -65,6 +65,20 @@ RankPart unpack_part(const std::string& s) {
   return p;
 }
 
+// Rank 0 prints every failed rank's message (rank order) and the run fails; `parts` from the gather.
+int report_rank_failures(const std::vector<std::string>& parts, int size) {
+  int failed = 0;
+  for (size_t r = 0; r < parts.size(); ++r) {
+    const RankPart part = unpack_part(parts[r]);
+    if (!part.header.contains("error")) continue;
+    ++failed;
+    fmt::print(stderr, "tb render under mpirun: rank {} of {} failed: {}\n", r, size,
+               part.header.at("error").get<std::string>());
+  }
+  if (failed > 0) fmt::print(stderr, "tb render under mpirun: {} of {} ranks failed; no image written\n", failed, size);
+  return failed;
+}
+
 }  // namespace
 
 int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
@@ -120,7 +134,18 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     return 2;
   }
   const auto t_load = std::chrono::steady_clock::now();
-  std::unique_ptr<World> world = load_scene_file(a.scene, a.resolution);
+  // Under mpirun a rank that fails (a scene missing on its machine, an exception while rendering)
+  // still takes part in the one gather, with its message instead of passes: rank 0 names it and
+  // every rank returns, instead of the others waiting for it forever.
+  std::unique_ptr<World> world;
+  try {
+    world = load_scene_file(a.scene, a.resolution);
+  } catch (const std::exception& e) {
+    if (!distributed) throw;
+    const std::vector<std::string> parts = mpi::gather(pack_part({{"error", e.what()}}, {}));
+    if (mw.rank == 0) report_rank_failures(parts, mw.size);
+    return 1;
+  }
   const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count();
 
   RenderSettings st = fixed_work_settings(*world, a.spp, a.passes, a.seed);
@@ -173,19 +198,25 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   // ramlt-*: the driver directly, for the partition option and the per-region maps.
   std::optional<path_space::RamltRegionMaps> ramlt_maps;
   int64_t passes = 0;
-  if (ramlt) {
-    path_space::RamltOptions ro;
-    if (a.integrator == "ramlt-multichain") ro.perturbation = path_space::RamltPerturbation::kMultiChain;
-    if (!a.partition.empty()) ro.partition = a.partition;
-    ro = path_space::apply_ramlt_params(ro, st.params);
-    const path_space::RamltStats rs = path_space::run_ramlt(*world, st, film, ro);
-    for (const auto& m : rs.mlt.mutations) report.mutations.push_back({m.name, m.proposed, m.accepted, m.errors});
-    report.mutations_total = rs.mlt.mutations_total;
-    report.mutations_per_second = rs.mlt.mutations_per_second();
-    ramlt_maps = rs.maps;
-    passes = rs.mlt.chains;
-  } else {
-    passes = integ->render(*world, st, film);
+  std::string rank_error;
+  try {
+    if (ramlt) {
+      path_space::RamltOptions ro;
+      if (a.integrator == "ramlt-multichain") ro.perturbation = path_space::RamltPerturbation::kMultiChain;
+      if (!a.partition.empty()) ro.partition = a.partition;
+      ro = path_space::apply_ramlt_params(ro, st.params);
+      const path_space::RamltStats rs = path_space::run_ramlt(*world, st, film, ro);
+      for (const auto& m : rs.mlt.mutations) report.mutations.push_back({m.name, m.proposed, m.accepted, m.errors});
+      report.mutations_total = rs.mlt.mutations_total;
+      report.mutations_per_second = rs.mlt.mutations_per_second();
+      ramlt_maps = rs.maps;
+      passes = rs.mlt.chains;
+    } else {
+      passes = integ->render(*world, st, film);
+    }
+  } catch (const std::exception& e) {
+    if (!distributed) throw;
+    rank_error = e.what();
   }
   WelchImage welch = film.welch();
   int64_t nonfinite = film.nonfinite().count();
@@ -193,10 +224,15 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     nlohmann::json h = {{"passes", passes}, {"nonfinite", nonfinite}, {"mutations_total", report.mutations_total}};
     h["mutations"] = nlohmann::json::array();
     for (const auto& m : report.mutations) h["mutations"].push_back({m.name, m.proposed, m.accepted, m.errors});
+    if (!rank_error.empty()) {
+      h = {{"error", rank_error}};
+      my_passes.clear();
+    }
     const std::vector<std::string> parts = mpi::gather(pack_part(h, my_passes));
     // Rank 0's exit status is the run's (mpirun reports a non-zero one); the other ranks are done, so
     // nothing after this point can leave them waiting on rank 0.
-    if (mw.rank != 0) return 0;
+    if (mw.rank != 0) return rank_error.empty() ? 0 : 1;
+    if (report_rank_failures(parts, mw.size) > 0) return 1;
     {
       const size_t px = welch.pixels();
       for (size_t r = 1; r < parts.size(); ++r) {
