@@ -143,7 +143,10 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   } catch (const std::exception& e) {
     if (!distributed) throw;
     const std::vector<std::string> parts = mpi::gather(pack_part({{"error", e.what()}}, {}));
-    if (mw.rank == 0) report_rank_failures(parts, mw.size);
+    // Only rank 0's exit status may be non-zero: mpirun ends the whole job at the first non-zero
+    // one, which could cut rank 0 off before it has named the failed ranks.
+    if (mw.rank != 0) return 0;
+    report_rank_failures(parts, mw.size);
     return 1;
   }
   const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count();
@@ -231,7 +234,7 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     const std::vector<std::string> parts = mpi::gather(pack_part(h, my_passes));
     // Rank 0's exit status is the run's (mpirun reports a non-zero one); the other ranks are done, so
     // nothing after this point can leave them waiting on rank 0.
-    if (mw.rank != 0) return rank_error.empty() ? 0 : 1;
+    if (mw.rank != 0) return 0;
     if (report_rank_failures(parts, mw.size) > 0) return 1;
     {
       const size_t px = welch.pixels();
