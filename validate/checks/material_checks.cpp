@@ -150,6 +150,7 @@ CheckResult run_chi2_cases(const CheckContext& ctx, const std::string& name, con
       worst = c.label() + ": " + r.message();
     }
     if (!r.passed(alpha)) res.passed = false;
+    state_chi2_power(res, r, alpha);
     ctx.progress(static_cast<double>(i + 1) / static_cast<double>(cases.size()));
   }
   res.p_value = stats::sidak_adjust(res.statistic, static_cast<int64_t>(cases.size()));
@@ -349,6 +350,7 @@ CheckResult run_microfacet_chi2(const CheckContext& ctx) {
   for (size_t i = 0; i < cases.size(); ++i) {
     const SamplerChi2Result r = microfacet_chi2(cases[i], n, ctx.seed, hash_values(hash_string("microfacet"), i), false);
     res.passed = res.passed && r.passed(alpha);
+    state_chi2_power(res, r, alpha);
     res.samples += r.samples;
     nlohmann::json d = r.details();
     d["label"] = cases[i].label();
