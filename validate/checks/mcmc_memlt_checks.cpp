@@ -21,7 +21,6 @@
 
 #include "estimators/mcmc/metropolis_hastings.h"
 #include "lib/core/hash.h"
-#include "lib/integrator/bdpt.h"
 #include "lib/mcmc/path_space/manifold_perturbation.h"
 #include "lib/mcmc/path_space/mlt.h"
 #include "lib/mcmc/path_space/path_mutations.h"
@@ -29,6 +28,7 @@
 #include "validate/mcmc/manifold_broken.h"
 #include "validate/mcmc/pairwise_balance.h"
 #include "validate/mcmc/pairwise_record.h"
+#include "validate/mcmc/path_space/mlt_image_check.h"
 #include "validate/mcmc/path_space/reference_density.h"
 #include "validate/mcmc/path_space/scene_cache.h"
 #include "validate/registry.h"
@@ -158,22 +158,7 @@ CheckResult mixture_pairwise(const CheckContext& cx, const std::string& name, co
 // against BDPT (compare_channels: Šidák over pixels and channels, Stouffer, sum z^2), alpha 1e-5.
 // broken: the manifold T without the generalised geometry term.
 CheckResult memlt_image(bool broken, const CheckContext& cx, const std::string& name, const std::string& file) {
-  constexpr int kImage = 8;
   constexpr int kDepth = 5;
-  const std::unique_ptr<World> world = load_scene_at_resolution(file, kImage, kImage);
-  Film ref(kImage, kImage);
-  RenderSettings rs;
-  rs.spp = cx.size(2048, 8192);
-  rs.passes = 32;
-  rs.max_depth = kDepth;
-  rs.seed = hash_values(cx.seed, hash_string(name + ".bdpt"));
-  render_bdpt(*world, rs, ref);
-  Film film(kImage, kImage);
-  RenderSettings st;
-  st.passes = cx.size(48, 128);
-  st.spp = st.passes * 160;
-  st.max_depth = kDepth;
-  st.seed = hash_values(cx.seed, hash_string(name));
   const auto counters = std::make_shared<HsltCounters>();
   MltOptions o;
   o.mutations = [counters, broken](const PathContext& ctx, const PathMutationSettings& s) {
@@ -185,25 +170,10 @@ CheckResult memlt_image(bool broken, const CheckContext& cx, const std::string& 
           [](const ManifoldBrokenDensity& m, const MltPath& x) { return m.applicable(x); });
     return l;
   };
-  const MltStats s = run_mlt(*world, st, film, o);
-  const ChannelCompare c = compare_channels(film.welch(), ref.welch(), kAlpha);
-  CheckResult res;
-  res.passed = broken ? c.rejects() : !c.rejects();
-  res.statistic_name = "p (Šidák over pixel channels)";
-  res.statistic = c.p_value();
-  res.p_value = c.p_value();
-  res.alpha = kAlpha;
-  res.samples = s.mutations_total;
-  double acc = 0.0;
-  for (const auto& m : s.mutations)
-    if (m.name == "manifold") acc = m.acceptance_rate();
-  res.message = fmt::format("{}: {} chains x {} mutations, manifold {} (acceptance {:.3f}) against BDPT: {}", file,
-                            s.chains, s.mutations_total / std::max<int64_t>(1, s.chains), walk_message(*counters), acc,
-                            c.message());
-  if (broken) res.message = (res.passed ? "broken variant rejected as required: " : "BROKEN VARIANT NOT DETECTED: ") + res.message;
-  res.details = c.details();
+  CheckResult res = mlt_image_against_bdpt(cx, name, file, kDepth, o, broken, kAlpha, "manifold", [&counters, &file] {
+    return fmt::format("{}: manifold {}", file, walk_message(*counters));
+  });
   res.details["walks"] = walk_json(*counters);
-  for (const auto& m : s.mutations) res.details["acceptance_" + m.name] = m.acceptance_rate();
   return res;
 }
 
