@@ -4,10 +4,10 @@
 //    the lens part from LensPerturbation::density's factors, the generalised geometry term from
 //    the DENSE Eq. 11 Jacobian (Eigen full-pivot LU instead of the block LU of Sec. 7) with the
 //    Dirac factors recomputed here, the landing indicators from the mutation's walks;
-//  - ManifoldWithoutGeometry (negative controls): T stated without the generalised geometry term
-//    |det J_S| prod 1 / (|dh/d omega_prev| |<h, n>|) (proposals unchanged);
-//  - ManifoldTransposedBlock (negative control): the geometry term with the C blocks of the chain
-//    Jacobian taken from the transposed A blocks (a wrong Eq. 11 assembly).
+//  - ManifoldBrokenDensity (negative controls of the pairwise checks), proposals unchanged:
+//    kNoGeometryTerm, T stated without the generalised geometry term
+//    |det J_S| prod 1 / (|dh/d omega_prev| |<h, n>|); kTransposedBlock, the geometry term with the C
+//    blocks of the chain Jacobian taken from the transposed A blocks (a wrong Eq. 11 assembly).
 #pragma once
 
 #include <cmath>

@@ -144,13 +144,13 @@ std::optional<MltPath> ManifoldPerturbation::propose(const MltPath& x, Uniforms&
 }
 
 PathMutationList make_memlt_mixture(const PathContext& ctx, const PathMutationSettings& s,
-                                    const std::shared_ptr<HsltCounters>& counters) {
+                                    const std::shared_ptr<HsltCounters>& counters, double r2) {
   const PathMutationInfo* bidir = find_path_mutation("bidirectional");
   const PathMutationInfo* manifold = find_path_mutation("manifold");
   PathMutationList out;
   out.push_back(bidir->make(ctx, s, bidir->weight));
   out.push_back(std::make_shared<const PathProposalMutation<ManifoldPerturbation>>(
-      "manifold", manifold->weight, ManifoldPerturbation(ctx, counters), manifold_applies));
+      "manifold", manifold->weight, ManifoldPerturbation(ctx, counters, 0.1, r2), manifold_applies));
   return out;
 }
 
@@ -161,9 +161,11 @@ namespace tb {
 int64_t render_memlt(const World& world, const RenderSettings& settings, Film& film) {
   using namespace path_space;
   const auto counters = std::make_shared<HsltCounters>();
+  const auto it = settings.params.find("r2");
+  const double r2 = it == settings.params.end() ? 0.0 : it->second;
   MltOptions o;
-  o.mutations = [counters](const PathContext& ctx, const PathMutationSettings& s) {
-    return make_memlt_mixture(ctx, s, counters);
+  o.mutations = [counters, r2](const PathContext& ctx, const PathMutationSettings& s) {
+    return make_memlt_mixture(ctx, s, counters, r2);
   };
   const MltStats stats = run_mlt(world, settings, film, o);
   fill_report(stats, settings.report);

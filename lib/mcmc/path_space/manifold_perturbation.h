@@ -100,14 +100,16 @@ bool manifold_applies(const ManifoldPerturbation& m, const MltPath& x);
 
 // The mixture of the integrator "memlt": the bidirectional mutation and the manifold perturbation
 // with their registered default weights (c_j(x) normalised over the mutations that apply to x).
+// r2: the lens kernel's outer radius in pixels (<= 0: 10% of the larger image side).
 PathMutationList make_memlt_mixture(const PathContext& ctx, const PathMutationSettings& s,
-                                    const std::shared_ptr<HsltCounters>& counters);
+                                    const std::shared_ptr<HsltCounters>& counters, double r2 = 0.0);
 
 }  // namespace tb::path_space
 
 namespace tb {
 // The renderer entry point for the integrator registry (name "memlt"): run_mlt over
 // make_memlt_mixture; prints the Table 3 statistics of Kaplanyan 2014 for the manifold walks as
-// render_hslt does.
+// render_hslt does. RenderSettings::params: "r2" (the lens kernel's outer radius in pixels,
+// default 10% of the larger image side).
 int64_t render_memlt(const World& world, const RenderSettings& settings, Film& film);
 }  // namespace tb
