@@ -56,6 +56,7 @@
 #include "lib/path/dirac.h"
 #include "validate/chi2/sampler_chi2.h"
 #include "validate/mcmc/hslt_broken.h"
+#include "validate/mcmc/hslt_counters_json.h"
 #include "validate/mcmc/pairwise_balance.h"
 #include "validate/mcmc/pairwise_record.h"
 #include "validate/mcmc/path_space/mlt_image_check.h"
@@ -73,21 +74,6 @@ constexpr int kMaxDepth = 4;
 constexpr int kRes = 16;
 
 const LoadedScene& scene(const std::string& file) { return cached_scene(file, kRes); }
-
-nlohmann::json counters_json(const HsltCounters& c) {
-  const HsltCountsSnapshot s = snapshot(c);
-  nlohmann::json status = nlohmann::json::object();
-  for (int i = 0; i < kHsltWalkStatusCount; ++i)
-    status[hslt_walk_status_name(static_cast<HsltWalkStatus>(i))] = s.status[static_cast<size_t>(i)];
-  return {{"proposals", s.proposals},
-          {"forward_walks", status},
-          {"iterations_per_converged_walk", s.iterations_per_converged()},
-          {"iterations_per_walk", s.iterations_per_walk()},
-          {"non_reversible", s.non_reversible},
-          {"non_reversible_fraction_of_converged", s.non_reversible_fraction()},
-          {"generated", s.generated},
-          {"jumps", {{"attempted", s.jump_attempted}, {"projected", s.jump_projected}, {"succeeded", s.jump_succeeded}}}};
-}
 
 // A BDPT path the mutation applies to (any path after 4096 tries: the pair then has no flux).
 std::function<MltPath(Uniforms&)> applicable_start(const LoadedScene& sc, const HsltMutation& m) {

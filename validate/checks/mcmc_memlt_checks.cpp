@@ -30,6 +30,7 @@
 #include "lib/mcmc/path_space/mlt.h"
 #include "lib/mcmc/path_space/path_mutations.h"
 #include "lib/mcmc/path_space/start_paths.h"
+#include "validate/mcmc/hslt_counters_json.h"
 #include "validate/mcmc/manifold_broken.h"
 #include "validate/mcmc/pairwise_balance.h"
 #include "validate/mcmc/pairwise_record.h"
@@ -47,19 +48,6 @@ using namespace tb::path_space;
 constexpr double kAlpha = 1e-5;
 constexpr int kMaxDepth = 4;
 constexpr int kRes = 16;
-
-nlohmann::json walk_json(const HsltCounters& c) {
-  const HsltCountsSnapshot s = snapshot(c);
-  nlohmann::json status = nlohmann::json::object();
-  for (int i = 0; i < kHsltWalkStatusCount; ++i)
-    status[hslt_walk_status_name(static_cast<HsltWalkStatus>(i))] = s.status[static_cast<size_t>(i)];
-  return {{"proposals", s.proposals},
-          {"forward_walks", status},
-          {"iterations_per_converged_walk", s.iterations_per_converged()},
-          {"non_reversible", s.non_reversible},
-          {"non_reversible_fraction_of_converged", s.non_reversible_fraction()},
-          {"generated", s.generated}};
-}
 
 std::string walk_message(const HsltCounters& c) {
   const HsltCountsSnapshot s = snapshot(c);
@@ -96,7 +84,7 @@ CheckResult pairwise_with(const CheckContext& cx, const std::string& name, const
   const auto r = mcmc::check_pairwise_balance<WithReferenceDensity<K, decltype(ref)>>(
       k, start, cx.size(300, 3000), cx.seed, hash_string(name));
   CheckResult res = pairwise_record(r, name);
-  res.details["walks"] = walk_json(*counters);
+  res.details["walks"] = counters_json(*counters);
   res.message = fmt::format("{}: {}; {}", file, res.message, walk_message(*counters));
   if (broken) {
     // Caught: some pair with flux violates balance against the correct T.
@@ -154,7 +142,7 @@ CheckResult mixture_pairwise(const CheckContext& cx, const std::string& name, co
   const auto r = mcmc::check_pairwise_balance<WithReferenceDensity<K, decltype(ref)>>(
       k, start, cx.size(400, 4000), cx.seed, hash_string(name));
   CheckResult res = pairwise_record(r, name);
-  res.details["walks"] = walk_json(*counters);
+  res.details["walks"] = counters_json(*counters);
   res.message = fmt::format("{}: {}; manifold: {}", file, res.message, walk_message(*counters));
   return res;
 }
@@ -176,7 +164,7 @@ CheckResult memlt_image(bool broken, const CheckContext& cx, const std::string& 
   CheckResult res = mlt_image_against_bdpt(cx, name, file, kDepth, o, broken, kAlpha, "manifold", [&counters, &file] {
     return fmt::format("{}: manifold {}", file, walk_message(*counters));
   });
-  res.details["walks"] = walk_json(*counters);
+  res.details["walks"] = counters_json(*counters);
   return res;
 }
 
