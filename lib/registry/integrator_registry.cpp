@@ -10,6 +10,7 @@
 #include "lib/integrator/path_filter.h"
 #include "lib/integrator/photon_map.h"
 #include "lib/mcmc/path_space/hslt_mutation.h"
+#include "lib/mcmc/path_space/manifold_perturbation.h"
 #include "lib/mcmc/path_space/mlt.h"
 #include "lib/mcmc/path_space/ramlt.h"
 #include "lib/mcmc/path_space/stratified_mlt.h"
@@ -91,6 +92,7 @@ const std::vector<IntegratorInfo>& integrators() {
         {"lt", "light tracing: emitter paths connected to the camera and splatted (importance transport)",
          [](const World& w, const RenderSettings& s, Film& f) { return render_lt(w, s, f); }},
         {"hslt", "path-space MLT with the half-vector mutation (Kaplanyan et al. 2014) mixed with the bidirectional mutation (pinhole)", render_hslt, {{"gamma", "half-vector step scale of Sec. 6.1 (default 0.1)"}, {"stratify", "1: Sec. 6.2-6.3 step sizes (default), 0: BSDF steps only"}, {"jump", "1: subspace jump of Sec. 5.2 (default), 0: off"}}},
+        {"memlt", "path-space MLT with the manifold perturbation of manifold exploration (Jakob and Marschner 2012: lens perturbation, specular chain re-solved by the half-vector walk) mixed with the bidirectional mutation (pinhole)", render_memlt, {{"r2", "lens kernel outer radius in pixels (default 10% of the larger image side)"}}},
         {"mlt", "Veach's path-space MLT: bidirectional mutation, lens and caustic perturbations through specular chains (pinhole)",
          [](const World& w, const RenderSettings& s, Film& f) { return render_mlt(w, s, f); }},
         {"mlt-stratified", "Veach's path-space MLT with Zirr & Dachsbacher 2020's stratified target "
