@@ -32,6 +32,10 @@ struct PfkRecorder {
   std::vector<PfkSampledPath> paths;
 };
 
+// 1 / D, 0 for D = 0 (no technique can produce the path: only under a broken weighting, whose images
+// must stay finite to be compared).
+inline double inverse_or_zero(double d) { return d > 0 ? 1.0 / d : 0.0; }
+
 // One filtered vertex of the output path being built (its column owned here; PfkLevel views it).
 struct PfkLevelState {
   SurfacePoint x;
@@ -210,7 +214,7 @@ class PfkContinuation {
               l.own = m + 1;
             }
             const FilteringWeight w = weigh(true, choice->light->is_delta());
-            out += beta * fl * ls->li * safe_ratio(1.0, w.denominator);
+            out += beta * fl * ls->li * inverse_or_zero(w.denominator);
           }
         }
       }
@@ -243,7 +247,7 @@ class PfkContinuation {
         path.back().column.push_back(pl);
         const FilteringWeight w = weigh(true, false);
         path.back().column.pop_back();
-        out += beta * fd * le * safe_ratio(1.0, w.denominator);
+        out += beta * fd * le * inverse_or_zero(w.denominator);
       });
       beta *= fd;
       scattered_at = d;
@@ -255,7 +259,7 @@ class PfkContinuation {
     const Rgb L = suffix_[static_cast<size_t>(scattered_at)]->li(ray, rng, rc, nullptr, true);
     if (is_black(L) && !record) return out;
     const FilteringWeight w = weigh(false, false);
-    return out + beta * L * safe_ratio(1.0, w.denominator);
+    return out + beta * L * inverse_or_zero(w.denominator);
   }
 
  private:

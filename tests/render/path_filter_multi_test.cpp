@@ -123,7 +123,7 @@ TEST(Pfk, RecordedPathsCarryTheProductOfSums) {
   ASSERT_GT(s.paths.size(), 100u);
   int deep = 0, with_members = 0;
   for (const PfkSampledPath& p : s.paths) {
-    ASSERT_GE(p.levels.size(), 2u);
+    ASSERT_GE(p.levels.size(), 1u);  // 1: x_2 not filterable (the path tracer goes on there)
     ASSERT_LE(p.levels.size(), 3u);
     deep += p.levels.size() == 3;
     double product = 1.0;
