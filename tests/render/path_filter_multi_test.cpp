@@ -5,6 +5,7 @@
 //  - the output paths the renderer records: one level per filtered vertex (at most K), the producing
 //    technique's counted density positive, the denominator the product of the columns' sums, expected
 //    counts 1 / M_d at d >= 2 (the own technique last among the M_d).
+// The furnace test of the estimator is in path_filter_multi_slowtest.cpp (label slow).
 #include <cmath>
 #include <span>
 #include <stdexcept>
