@@ -295,10 +295,10 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
                         {"nonfinite_samples", nonfinite},
                         {"mpi_ranks", mw.size},
                         {"pass_tiles", tiles_path},
-                        // MCMC: one chain's splats spread over the image; pf1: a kernel reuses its
+                        // MCMC: one chain's splats spread over the image; pf1, pfk: a kernel reuses its
                         // neighbours' directions. Pixels of a pass are dependent, and tb compare decides on
                         // the pass-tile test (docs/integrator.md).
-                        {"pixels_dependent_within_pass", !report.mutations.empty() || ramlt || a.integrator == "pf1"},
+                        {"pixels_dependent_within_pass", !report.mutations.empty() || ramlt || a.integrator == "pf1" || a.integrator == "pfk"},
                         {"interrupted", interrupted && interrupted->load()},
                         {"scene_description", world->description()}};
   if (!report.mutations.empty()) {
@@ -334,12 +334,12 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
       fmt::print("{} proposed moves with a stated forward density of 0 or non-finite Hastings terms (never accepted): "
                  "a mutation misstates its density\n", errors);
   }
-  if (a.integrator == "pf1") {
+  if (a.integrator == "pf1" || a.integrator == "pfk") {
     const Pf1Timing t = pf1_last_timing();
     if (t.passes > 0)
-      fmt::print("pf1: {:.3f} s per pass in the prefix pass, {:.3f} s per pass filtering (kernels, weights, suffixes); "
+      fmt::print("{}: {:.3f} s per pass in the prefix pass, {:.3f} s per pass filtering (kernels, weights, suffixes); "
                  "mean kernel {:.2f} prefixes\n",
-                 t.prefix_seconds / double(t.passes), t.filter_seconds / double(t.passes), t.mean_members);
+                 a.integrator, t.prefix_seconds / double(t.passes), t.filter_seconds / double(t.passes), t.mean_members);
   }
   if (film.nonfinite().count() > 0)
     fmt::print("{} (replay: tb render {} --integrator {} --seed {})\n", film.nonfinite().summary(), a.scene,

@@ -8,6 +8,7 @@
 #include "lib/integrator/light_tracer.h"
 #include "lib/integrator/path_tracer.h"
 #include "lib/integrator/path_filter.h"
+#include "lib/integrator/path_filter_multi.h"
 #include "lib/integrator/photon_map.h"
 #include "lib/mcmc/path_space/hslt_mutation.h"
 #include "lib/mcmc/path_space/manifold_perturbation.h"
@@ -57,11 +58,13 @@ std::vector<IntegratorParameter> photon_map_parameters(bool progressive) {
   return out;
 }
 
-std::vector<IntegratorParameter> pf1_parameters() {
+std::vector<IntegratorParameter> to_parameters(const std::vector<std::pair<std::string, std::string>>& list) {
   std::vector<IntegratorParameter> out;
-  for (const auto& [name, description] : pf1_parameter_list()) out.push_back({name, description});
+  for (const auto& [name, description] : list) out.push_back({name, description});
   return out;
 }
+std::vector<IntegratorParameter> pf1_parameters() { return to_parameters(pf1_parameter_list()); }
+std::vector<IntegratorParameter> pfk_parameters() { return to_parameters(pfk_parameter_list()); }
 
 }  // namespace
 
@@ -147,6 +150,8 @@ const std::vector<IntegratorInfo>& integrators() {
          [](const World& w, const RenderSettings& s, Film& f) { return render_sppm(w, s, f); }, photon_map_parameters(true)},
         {"pf1", "single-vertex path filtering as unbiased marginal MIS (West et al. 2022, Sec. 5, K = 1): directions of neighbouring prefixes reused at the first camera vertex",
          [](const World& w, const RenderSettings& s, Film& f) { return render_pf1(w, s, f); }, pf1_parameters()},
+        {"pfk", "multi-vertex path filtering as unbiased marginal MIS (West et al. 2022, Sec. 5, Eq. 14): directions of neighbouring prefixes reused at the first K camera vertices",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_pfk(w, s, f); }, pfk_parameters()},
         {"pt", "path tracing with next-event estimation, MIS (power heuristic) and Russian roulette",
          [](const World& w, const RenderSettings& s, Film& f) { return render_pt(w, s, f); }},
     };
