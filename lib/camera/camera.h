@@ -102,6 +102,8 @@ class Camera {
   virtual double importance(const Ray& ray) const = 0;
   // Densities of generating this ray by generate_ray with uniform raster and lens uniforms.
   virtual CameraPdf pdf_we(const Ray& ray) const = 0;
+  // pdf_we(ray).pos alone, bitwise (the pinhole's is 1 for every ray: no raster mapping needed).
+  virtual double pdf_we_pos(const Ray& ray) const { return pdf_we(ray).pos; }
   // Samples a lens point from lens uniforms and connects the reference point to it.
   virtual std::optional<CameraWiSample> sample_wi(const Vec3& ref, const Vec2& lens_u) const = 0;
 

@@ -35,6 +35,10 @@ std::optional<CameraRasterHit> PinholeCamera::raster_from_ray(const Ray& ray) co
 
 double PinholeCamera::importance(const Ray& ray) const {
   if (!raster_from_ray(ray)) return 0.0;
+  return importance_inside(ray);
+}
+
+double PinholeCamera::importance_inside(const Ray& ray) const {
   const double cos_t = proj_.to_camera_dir(ray.d).z / glm::length(ray.d);
   // pbrt-v3 Eq. 16.3 with A_lens = 1: We = 1 / (A cos^4 theta).
   return 1.0 / (proj_.plane_area() * sqr(sqr(cos_t)));
@@ -62,7 +66,7 @@ std::optional<CameraWiSample> PinholeCamera::sample_wi(const Vec3& ref, const Ve
   const auto hit = raster_from_ray(out);
   if (!hit) return std::nullopt;
   s.raster = hit->raster;
-  s.importance = importance(out);
+  s.importance = importance_inside(out);  // importance(out), its raster mapping done just above
   // The Dirac lens position carries unit mass: pdf = dist^2 / cos theta (pbrt-v3 Sample_Wi
   // with lensArea = 1), so We cos / pdf reproduces the geometry term We cos cos' / dist^2
   // once the caller multiplies by the cosine at the reference point.

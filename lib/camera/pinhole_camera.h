@@ -18,10 +18,13 @@ class PinholeCamera final : public Camera {
   std::optional<CameraRasterHit> raster_from_ray(const Ray& ray) const override;
   double importance(const Ray& ray) const override;
   CameraPdf pdf_we(const Ray& ray) const override;
+  double pdf_we_pos(const Ray&) const override { return 1.0; }  // pdf_we's pos for every ray
   std::optional<CameraWiSample> sample_wi(const Vec3& ref, const Vec2& lens_u) const override;
 
  private:
   Vec3 direction_through(const Vec2& raster) const;
+  // importance(ray) for a ray known to pass through the image (raster_from_ray succeeded).
+  double importance_inside(const Ray& ray) const;
 };
 
 }  // namespace tb

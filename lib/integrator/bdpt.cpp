@@ -18,8 +18,7 @@ int generate_camera_subpath(const PathContext& ctx, const Vec2& raster, const Ve
   z0.kind = VertexKind::kCamera;
   z0.hit.p = cr.ray.o;
   z0.hit.n = z0.hit.ng = cam.projection().forward();
-  const CameraPdf p = cam.pdf_we(cr.ray);
-  z0.pdf_fwd = p.pos;
+  z0.pdf_fwd = cam.pdf_we_pos(cr.ray);
   z0.beta = Rgb(cr.weight);
   path->push_back(z0);
   random_walk(ctx, rng, cr.ray, z0.beta, static_cast<size_t>(max_vertices),

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -29,15 +30,20 @@ inline double abs_cos(const Vec3& n, const Vec3& w) {
 // its forward area density, and for the vertex two steps back its reverse one, are evaluated
 // with pdf_next() on the vertex positions (not the sampled ray directions, which differ by the
 // spawn offsets), so they equal what path_densities() computes for the finished path.
+// Both densities at the scattering vertex path[m - 1] are evaluated with the SurfaceScatter that
+// sampled its outgoing direction (`scatter`, built on its hit, which no push_back has moved since),
+// so its shading frame is built once (pdf_next's overload: the same values).
 inline void random_walk(const PathContext& ctx, Uniforms& rng, Ray ray, Rgb beta, size_t max_vertices,
                         TransportMode mode, std::vector<PathVertex>* path,
                         ImportanceCorrection correction = &importance_shading_correction) {
   const World& world = *ctx.world;
+  std::optional<SurfaceScatter> scatter;  // at path->back() once it has scattered
   auto link = [&](PathVertex& v) {  // densities of the vertex just found, before it is pushed
     const size_t m = path->size();  // index v will take
     const PathVertex* before2 = m >= 2 ? &(*path)[m - 2] : nullptr;
-    v.pdf_fwd = pdf_next(ctx, before2, (*path)[m - 1], v, mode);
-    if (before2) (*path)[m - 2].pdf_rev = pdf_next(ctx, &v, (*path)[m - 1], *before2, opposite(mode));
+    const SurfaceScatter* sc = scatter ? &*scatter : nullptr;
+    v.pdf_fwd = pdf_next(ctx, before2, (*path)[m - 1], v, mode, sc);
+    if (before2) (*path)[m - 2].pdf_rev = pdf_next(ctx, &v, (*path)[m - 1], *before2, opposite(mode), sc);
   };
   while (path->size() < max_vertices) {
     PathVertex v;  // the hit is written into v.hit in place (Scene::intersect(ray, Hit*))
@@ -64,7 +70,7 @@ inline void random_walk(const PathContext& ctx, Uniforms& rng, Ray ray, Rgb beta
     if (path->size() >= max_vertices || !v.bsdf) return;
 
     PathVertex& cur = path->back();
-    const SurfaceScatter sc(cur.hit, *cur.bsdf, correction);
+    const SurfaceScatter& sc = scatter.emplace(cur.hit, *cur.bsdf, correction);
     const Vec3 wo = -glm::normalize(ray.d);
     const double uc = rng.next();
     const Vec2 u = rng.next2();
@@ -92,52 +98,57 @@ inline bool visible(const Scene& scene, const PathVertex& a, const PathVertex& b
 
 // The MIS weight of technique s for the path x_0..x_k made of light[0..s) and camera[t-1..0],
 // with `x0` / `xk` replacing the sampled end vertices of s = 1 / t = 1 connections.
+// light_scatter / camera_scatter (null: none): SurfaceScatters the connection built on the
+// connected vertices x_{s-1} and x_s; their densities are evaluated with them (pdf_next's
+// overload: the same values, each shading frame built once). The densities live in fixed arrays
+// on the stack, only their first k + 1 entries written and read.
 template <class Terms>
 double connection_weight(const PathContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
-                         int s, int t, const PathVertex* x0_override, const PathVertex* xk_override) {
+                         int s, int t, const PathVertex* x0_override, const PathVertex* xk_override,
+                         const SurfaceScatter* light_scatter = nullptr, const SurfaceScatter* camera_scatter = nullptr) {
+  constexpr int kMaxVertices = 128;
   const int k = s + t - 1;
-  std::array<const PathVertex*, 128> xs{};
-  if (k + 1 > static_cast<int>(xs.size())) return 0.0;
-  for (int i = 0; i <= k; ++i) xs[i] = i < s ? &light[i] : &camera[k - i];
-  if (x0_override) xs[0] = x0_override;
-  if (xk_override) xs[k] = xk_override;
-  auto X = [&](int i) -> const PathVertex& { return *xs[i]; };
+  if (k + 1 > kMaxVertices) return 0.0;
+  auto X = [&](int i) -> const PathVertex& {
+    if (i == 0 && x0_override) return *x0_override;
+    if (i == k && xk_override) return *xk_override;
+    return i < s ? light[static_cast<size_t>(i)] : camera[static_cast<size_t>(k - i)];
+  };
 
-  thread_local PathDensities d;
-  thread_local std::vector<double> q;
-  d.pL.assign(k + 1, 0.0);
-  d.pE.assign(k + 1, 0.0);
-  d.delta.assign(k + 1, 0);
-  d.x0_infinite = X(0).infinite;
+  std::array<double, kMaxVertices> pL, pE, q;
+  std::array<uint8_t, kMaxVertices> delta;
   for (int i = 0; i <= k; ++i) {
     const PathVertex& v = X(i);
-    d.delta[i] = v.delta ? 1 : 0;
+    delta[i] = v.delta ? 1 : 0;
     if (i < s) {
-      d.pL[i] = v.pdf_fwd;
-      d.pE[i] = v.pdf_rev;
+      pL[i] = v.pdf_fwd;
+      pE[i] = v.pdf_rev;
     } else {
-      d.pE[i] = v.pdf_fwd;
-      d.pL[i] = v.pdf_rev;
+      pE[i] = v.pdf_fwd;
+      pL[i] = v.pdf_rev;
     }
   }
   // Densities that depend on the connection (pbrt-v3 Sec. 16.3.4 updates the same four).
   if (s >= 1)
-    d.pE[s - 1] = pdf_next(ctx, t >= 2 ? &X(s + 1) : nullptr, X(s), X(s - 1), TransportMode::kRadiance);
-  if (s >= 2) d.pE[s - 2] = pdf_next(ctx, &X(s), X(s - 1), X(s - 2), TransportMode::kRadiance);
+    pE[s - 1] = pdf_next(ctx, t >= 2 ? &X(s + 1) : nullptr, X(s), X(s - 1), TransportMode::kRadiance, camera_scatter);
+  if (s >= 2) pE[s - 2] = pdf_next(ctx, &X(s), X(s - 1), X(s - 2), TransportMode::kRadiance, light_scatter);
   if (s == 0) {
-    d.pL[0] = pdf_light_origin(ctx, X(0));
-    if (k >= 2) d.pL[1] = pdf_light_next(X(0), X(1));
+    pL[0] = pdf_light_origin(ctx, X(0));
+    if (k >= 2) pL[1] = pdf_light_next(X(0), X(1));
   }
-  if (s >= 1 && s < k) d.pL[s] = pdf_next(ctx, s >= 2 ? &X(s - 2) : nullptr, X(s - 1), X(s), TransportMode::kImportance);
-  if (s >= 1 && s + 1 < k) d.pL[s + 1] = pdf_next(ctx, &X(s - 1), X(s), X(s + 1), TransportMode::kImportance);
+  if (s >= 1 && s < k)
+    pL[s] = pdf_next(ctx, s >= 2 ? &X(s - 2) : nullptr, X(s - 1), X(s), TransportMode::kImportance, light_scatter);
+  if (s >= 1 && s + 1 < k)
+    pL[s + 1] = pdf_next(ctx, &X(s - 1), X(s), X(s + 1), TransportMode::kImportance, camera_scatter);
   if constexpr (!Terms::kMisFullDenominator) {  // one density left out of the denominator (read as 1)
     if (s >= 1)
-      d.pE[s - 1] = 1.0;
+      pE[s - 1] = 1.0;
     else
-      d.pL[0] = 1.0;
+      pL[0] = 1.0;
   }
-  technique_ratios(d, s, &q);
-  return mis_weight_from_ratios(q, s, MisKind::kPower);
+  const size_t n = static_cast<size_t>(k + 1);
+  technique_ratios(PathDensitySpans{pL.data(), pE.data(), delta.data(), n, X(0).infinite}, s, q.data());
+  return mis_weight_from_ratios(std::span<const double>(q.data(), n), s, MisKind::kPower);
 }
 
 template <class Terms>
@@ -209,13 +220,14 @@ Connection connect_bdpt_with(const PathContext& ctx, std::span<const PathVertex>
     xk.kind = VertexKind::kCamera;
     xk.hit.p = cs->lens_point;
     xk.hit.n = xk.hit.ng = cam.projection().forward();
-    xk.pdf_fwd = cam.pdf_we(Ray{cs->lens_point, -cs->wi}).pos;
+    xk.pdf_fwd = cam.pdf_we_pos(Ray{cs->lens_point, -cs->wi});
     xk.beta = Rgb(cs->importance / cs->pdf);
     Rgb fs;
+    std::optional<SurfaceScatter> sc_l;  // at ls when it scatters (s >= 2), shared with the MIS weight
     if (s == 1)
       fs = emitted(ls, xk);
     else
-      fs = SurfaceScatter(ls.hit, *ls.bsdf, Terms::kImportanceCorrection)
+      fs = sc_l.emplace(ls.hit, *ls.bsdf, Terms::kImportanceCorrection)
                .f(direction(ls, light[s - 2]), cs->wi, TransportMode::kImportance);
     c.unweighted = ls.beta * fs * abs_cos(ls.shading_normal(), cs->wi) * xk.beta;
     if (is_black(c.unweighted) || !visible(scene, ls, xk)) {
@@ -224,7 +236,7 @@ Connection connect_bdpt_with(const PathContext& ctx, std::span<const PathVertex>
     }
     c.raster = cs->raster;
     c.sampled = xk;
-    c.weight = connection_weight<Terms>(ctx, light, camera, s, t, nullptr, &xk);
+    c.weight = connection_weight<Terms>(ctx, light, camera, s, t, nullptr, &xk, sc_l ? &*sc_l : nullptr, nullptr);
     c.value = c.unweighted * c.weight;
     return c;
   }
@@ -243,7 +255,8 @@ Connection connect_bdpt_with(const PathContext& ctx, std::span<const PathVertex>
     x0.infinite = (choice->light->flags() & light_flags::kInfinite) != 0;
     x0.w_inf = li->wi;
     x0.pdf_fwd = pdf_light_origin(ctx, x0);
-    const Rgb fs = SurfaceScatter(ct.hit, *ct.bsdf).f(direction(ct, camera[t - 2]), li->wi, TransportMode::kRadiance);
+    const SurfaceScatter sc_c(ct.hit, *ct.bsdf);  // shared with the MIS weight
+    const Rgb fs = sc_c.f(direction(ct, camera[t - 2]), li->wi, TransportMode::kRadiance);
     const double cosine = Terms::kNeeReceiverCosine ? abs_cos(ct.shading_normal(), li->wi) : 1.0;
     c.unweighted = ct.beta * fs * cosine * li->li / (choice->pmf * li->pdf);
     if (is_black(c.unweighted) || !visible(scene, ct, x0)) {
@@ -251,7 +264,8 @@ Connection connect_bdpt_with(const PathContext& ctx, std::span<const PathVertex>
       return c;
     }
     c.sampled = x0;
-    c.weight = connection_weight<Terms>(ctx, std::span<const PathVertex>(&x0, 1), camera, s, t, &x0, nullptr);
+    c.weight = connection_weight<Terms>(ctx, std::span<const PathVertex>(&x0, 1), camera, s, t, &x0, nullptr, nullptr,
+                                        &sc_c);
     c.value = c.unweighted * c.weight;
     return c;
   }
@@ -260,16 +274,18 @@ Connection connect_bdpt_with(const PathContext& ctx, std::span<const PathVertex>
   const double d2 = glm::dot(d, d);
   if (!(d2 > 0)) return c;
   const Vec3 w = d / std::sqrt(d2);  // from the light side to the camera side
-  const Rgb fl = SurfaceScatter(ls.hit, *ls.bsdf, Terms::kImportanceCorrection)
-                     .f(direction(ls, light[s - 2]), w, TransportMode::kImportance);
-  const Rgb fc = SurfaceScatter(ct.hit, *ct.bsdf).f(direction(ct, camera[t - 2]), -w, TransportMode::kRadiance);
+  // Both scatters are shared with the MIS weight (its four connection densities sit at ls and ct).
+  const SurfaceScatter sc_l(ls.hit, *ls.bsdf, Terms::kImportanceCorrection);
+  const SurfaceScatter sc_c(ct.hit, *ct.bsdf);
+  const Rgb fl = sc_l.f(direction(ls, light[s - 2]), w, TransportMode::kImportance);
+  const Rgb fc = sc_c.f(direction(ct, camera[t - 2]), -w, TransportMode::kRadiance);
   const double g = abs_cos(ls.shading_normal(), w) * abs_cos(ct.shading_normal(), w) / d2;
   c.unweighted = ls.beta * fl * g * fc * ct.beta;
   if (is_black(c.unweighted) || !visible(scene, ls, ct)) {
     c.unweighted = Rgb(0.0);
     return c;
   }
-  c.weight = connection_weight<Terms>(ctx, light, camera, s, t, nullptr, nullptr);
+  c.weight = connection_weight<Terms>(ctx, light, camera, s, t, nullptr, nullptr, &sc_l, &sc_c);
   c.value = c.unweighted * c.weight;
   return c;
 }

@@ -74,19 +74,28 @@ double AreaLight::pdf_li(const Vec3& ref, const Vec3& wi, const SurfacePoint* on
 }
 
 std::optional<LightLeSample> AreaLight::sample_le(const Vec2& u_pos, const Vec2& u_dir) const {
-  const AreaSample s = scene_->sample_area(shape_id_, u_pos);
-  if (!(s.pdf_area > 0)) return std::nullopt;
-  const Vec3 w = sample_emission_direction(s.hit.n, two_sided_, u_dir);
-  const double pdf_dir = pdf_emission_direction(s.hit.n, two_sided_, w);
-  if (!(pdf_dir > 0)) return std::nullopt;
-  LightLeSample e;
-  e.ray = Ray{s.hit.p, w};
-  e.n = s.hit.n;
-  e.le = le(s.hit.n, w);
-  e.pdf_pos = s.pdf_area;
+  // Built in place and returned by name, the point written straight into the sample's Hit
+  // (Scene::sample_area_into, the expressions of Scene::sample_area), as in sample_li: no copies of
+  // the ~220-byte Hit through an AreaSample and the returned optional.
+  std::optional<LightLeSample> out(std::in_place);
+  LightLeSample& e = *out;
+  const double pdf_area = scene_->sample_area_into(shape_id_, u_pos, &e.hit);
+  if (!(pdf_area > 0)) {
+    out.reset();
+    return out;
+  }
+  const Vec3 w = sample_emission_direction(e.hit.n, two_sided_, u_dir);
+  const double pdf_dir = pdf_emission_direction(e.hit.n, two_sided_, w);
+  if (!(pdf_dir > 0)) {
+    out.reset();
+    return out;
+  }
+  e.ray = Ray{e.hit.p, w};
+  e.n = e.hit.n;
+  e.le = le(e.hit.n, w);
+  e.pdf_pos = pdf_area;
   e.pdf_dir = pdf_dir;
-  e.hit = s.hit;
-  return e;
+  return out;
 }
 
 void AreaLight::pdf_le(const Hit& at, const Vec3& w, double* pdf_pos, double* pdf_dir) const {

@@ -1,5 +1,6 @@
 #include "lib/path/path.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "estimators/mis_heuristics.h"
@@ -45,6 +46,11 @@ bool PathVertex::connectible() const {
 
 double pdf_next(const PathContext& ctx, const PathVertex* prev, const PathVertex& cur, const PathVertex& next,
                 TransportMode mode) {
+  return pdf_next(ctx, prev, cur, next, mode, nullptr);
+}
+
+double pdf_next(const PathContext& ctx, const PathVertex* prev, const PathVertex& cur, const PathVertex& next,
+                TransportMode mode, const SurfaceScatter* cur_scatter) {
   switch (cur.kind) {
     case VertexKind::kCamera: {
       const CameraPdf p = ctx.world->camera().pdf_we(Ray{cur.hit.p, direction(cur, next)});
@@ -57,7 +63,8 @@ double pdf_next(const PathContext& ctx, const PathVertex* prev, const PathVertex
   }
   if (!prev) return pdf_light_next(cur, next);  // an emitting surface as the first vertex
   if (!cur.bsdf || cur.delta) return 0.0;
-  const double pdf_w = SurfaceScatter(cur.hit, *cur.bsdf).pdf(direction(cur, *prev), direction(cur, next), mode);
+  const Vec3 wo = direction(cur, *prev), wi = direction(cur, next);
+  const double pdf_w = cur_scatter ? cur_scatter->pdf(wo, wi, mode) : SurfaceScatter(cur.hit, *cur.bsdf).pdf(wo, wi, mode);
   return to_area(pdf_w, cur, next);
 }
 
@@ -151,7 +158,7 @@ PathDensities path_densities(const PathContext& ctx, std::span<const PathVertex>
   d.pL[0] = pdf_light_origin(ctx, x[0]);
   if (k >= 1 && x[1].kind != VertexKind::kCamera) d.pL[1] = pdf_light_next(x[0], x[1]);
   for (size_t i = 2; i < k; ++i) d.pL[i] = step(&x[i - 2], x[i - 1], x[i], TransportMode::kImportance);
-  d.pE[k] = ctx.world->camera().pdf_we(Ray{x[k].hit.p, direction(x[k], x[k - 1])}).pos;
+  d.pE[k] = ctx.world->camera().pdf_we_pos(Ray{x[k].hit.p, direction(x[k], x[k - 1])});
   d.pE[k - 1] = pdf_next(ctx, nullptr, x[k], x[k - 1], TransportMode::kRadiance);
   for (size_t i = k - 1; i-- > 0;) d.pE[i] = step(&x[i + 2], x[i + 1], x[i], TransportMode::kRadiance);
   return d;
@@ -160,19 +167,23 @@ PathDensities path_densities(const PathContext& ctx, std::span<const PathVertex>
 namespace {
 
 // Can technique j (light subpath x_0..x_{j-1}, camera subpath x_j..x_k) sample the path?
-bool technique_valid(const PathDensities& d, size_t j) {
-  const size_t k = d.size() - 1;
+bool technique_valid(const PathDensitySpans& d, size_t j) {
+  const size_t k = d.n - 1;
   if (j > k) return false;                // t = 0: never used
   if (j == 0) return d.delta[0] == 0;     // the camera path must hit the emitter by chance
   if (j == 1 && d.x0_infinite && k == 1) return false;  // a direction cannot be joined to the lens
   return d.delta[j] == 0 && (j == 1 || d.delta[j - 1] == 0);
 }
 
+PathDensitySpans spans_of(const PathDensities& d) {
+  return {d.pL.data(), d.pE.data(), d.delta.data(), d.size(), d.x0_infinite};
+}
+
 }  // namespace
 
-void technique_ratios(const PathDensities& d, int s, std::vector<double>* q) {
-  const size_t n = d.size();
-  q->assign(n, 0.0);
+void technique_ratios(const PathDensitySpans& d, int s, double* q) {
+  const size_t n = d.n;
+  std::fill(q, q + n, 0.0);
   const size_t ss = static_cast<size_t>(s);
   // A zero in a numerator is read as 1 only when it is the stored pseudo-density of a Dirac vertex
   // (pE[j] generated at a Dirac x_{j+1}, pL[j] at a Dirac x_{j-1}, or pL[1] at a Dirac emitter).
@@ -187,20 +198,25 @@ void technique_ratios(const PathDensities& d, int s, std::vector<double>* q) {
   for (size_t i = 0; i + 1 < n; ++i)
     if ((i < ss ? pl_num(i) : pe_num(i)) == 0.0) return;
   double r = 1.0;
-  if (technique_valid(d, ss)) (*q)[ss] = 1.0;
+  if (technique_valid(d, ss)) q[ss] = 1.0;
   for (size_t j = ss; j-- > 0;) {  // x_j moves from the light subpath to the camera subpath
     r *= pe_num(j) / remap0(d.pL[j]);
-    if (technique_valid(d, j)) (*q)[j] = r;
+    if (technique_valid(d, j)) q[j] = r;
   }
   r = 1.0;
   for (size_t j = ss + 1; j < n; ++j) {  // x_{j-1} moves from the camera subpath to the light subpath
     r *= pl_num(j - 1) / remap0(d.pE[j - 1]);
-    if (technique_valid(d, j)) (*q)[j] = r;
+    if (technique_valid(d, j)) q[j] = r;
   }
 }
 
+void technique_ratios(const PathDensities& d, int s, std::vector<double>* q) {
+  q->assign(d.size(), 0.0);
+  technique_ratios(spans_of(d), s, q->data());
+}
+
 double technique_density(const PathDensities& d, int s) {
-  if (!technique_valid(d, static_cast<size_t>(s))) return 0.0;
+  if (!technique_valid(spans_of(d), static_cast<size_t>(s))) return 0.0;
   double p = 1.0;
   for (size_t i = 0; i < d.size(); ++i) p *= (static_cast<int>(i) < s ? d.pL[i] : d.pE[i]);
   return p;

@@ -43,6 +43,7 @@
 #include "lib/material/bsdf.h"
 #include "lib/path/light_sampler.h"
 #include "lib/path/measure.h"
+#include "lib/path/scattering.h"
 #include "lib/scene/world.h"
 
 namespace tb {
@@ -95,6 +96,12 @@ struct PathContext {
 // the BSDF density (0 for Dirac vertices).
 double pdf_next(const PathContext& ctx, const PathVertex* prev, const PathVertex& cur, const PathVertex& next,
                 TransportMode mode);
+// The same density, with `cur_scatter` (null: none) a SurfaceScatter already built on cur's hit
+// and BSDF: a surface vertex's density is then evaluated with it instead of a fresh one, so the
+// shading frames it has built are reused (the value is bitwise that of pdf_next: a frame is a
+// function of the hit's normal and the side, and pdf() reads no importance correction).
+double pdf_next(const PathContext& ctx, const PathVertex* prev, const PathVertex& cur, const PathVertex& next,
+                TransportMode mode, const SurfaceScatter* cur_scatter);
 // Area density at `to` of a direction density pdf_w (solid angle) at `from`: pdf_w itself when
 // `to` is a direction (infinite light), 0 when `to` is a point light.
 inline double to_area(double pdf_w, const PathVertex& from, const PathVertex& to) {
@@ -144,6 +151,16 @@ PathDensities path_densities(const PathContext& ctx, std::span<const PathVertex>
 double technique_density(const PathDensities& d, int s);
 // q_j / q_s for j = 0..k (0 where technique j cannot sample X); q_t=0 excluded.
 void technique_ratios(const PathDensities& d, int s, std::vector<double>* q);
+// The same over densities held in caller storage (BDPT's connections keep them in fixed arrays on
+// the stack): n = k + 1 vertices, q has room for n ratios.
+struct PathDensitySpans {
+  const double* pL = nullptr;
+  const double* pE = nullptr;
+  const uint8_t* delta = nullptr;
+  size_t n = 0;
+  bool x0_infinite = false;
+};
+void technique_ratios(const PathDensitySpans& d, int s, double* q);
 
 enum class MisKind { kBalance, kPower };
 // MIS weight of technique s for X from its densities: BalanceHeuristic / PowerHeuristic (beta = 2)
