@@ -2,6 +2,8 @@
 // validate/checks/mcmc_apt_checks.cpp. Wrappers only: nothing here is in lib/.
 #pragma once
 
+#include <vector>
+
 #include "estimators/mcmc/chain_step.h"
 #include "estimators/mcmc/concepts.h"
 #include "lib/mcmc/apt_small_step.h"
@@ -45,5 +47,17 @@ struct MisstatedAptFactor {
     return AptSmallStep::factor(w, i, d);
   }
 };
+
+// The apt integrator (lib/mcmc/apt_integrator.h) splatting without the (1 - a) splat of the
+// current state (AptSettings::splat_weight).
+inline double apt_splat_without_rejected(Which which, double w, double pi) { return which == Which::kCurrent ? 0.0 : w / pi; }
+
+// The apt integrator's bootstrap weight of a draw from its shortest positive candidate only, not
+// the sum S over its candidates (AptSettings::bootstrap_sum): b then misses the longer prefixes.
+inline double apt_bootstrap_first_candidate(const std::vector<double>& w) {
+  for (double v : w)
+    if (v > 0.0) return v;
+  return 0.0;
+}
 
 }  // namespace tb::mcmc
