@@ -7,8 +7,9 @@
 //    render.pssmlt.cornell.unbiased does (mcmc_pss_checks.cpp);
 //  * render.apt.negative_control.no_rejected_splat (cornell, glossy): expected-value splatting
 //    without the (1 - a) splat of the current state (validate/mcmc/apt_broken.h) must be rejected;
-//  * render.apt.negative_control.bootstrap_first_candidate: the normalisation b estimated from the
-//    shortest candidate of each bootstrap draw only (not the sum over its candidates) must be rejected.
+//  * render.apt.negative_control.bootstrap_last_candidate: the normalisation b (and the chains'
+//    starts) from the full-length candidate of each bootstrap draw only, not the sum over its
+//    prefixes, must be rejected.
 // Fixed seeds: the run seed hashed with the check's name.
 #include <algorithm>
 #include <map>
@@ -34,7 +35,7 @@ constexpr double kAlpha = 0.01;    // per image check (Šidák inside compare_ch
 constexpr int kMaxDepth = 3;       // paths of up to 4 segments
 constexpr double kMinVisits = 32;  // expected mutations per pixel and pass to enter the t-test
 
-enum class AptFault { kNone, kNoRejectedSplat, kBootstrapFirstCandidate };
+enum class AptFault { kNone, kNoRejectedSplat, kBootstrapLastCandidate };
 
 struct Size {
   int res;
@@ -84,7 +85,7 @@ CheckResult run_apt_image(const CheckContext& ctx, const std::string& scene, Apt
   a.bootstrap = N / 2;                             // b's noise is common to all pixels: keep it below theirs
   a.chains = 256;
   if (fault == AptFault::kNoRejectedSplat) a.splat_weight = mcmc::apt_splat_without_rejected;
-  if (fault == AptFault::kBootstrapFirstCandidate) a.bootstrap_sum = mcmc::apt_bootstrap_first_candidate;
+  if (fault == AptFault::kBootstrapLastCandidate) a.bootstrap_sum = mcmc::apt_bootstrap_last_candidate;
   Film film(sz.res, sz.res);
   apt::AptStats stats;
   apt::run_apt(*world, st, a, film, &stats);
@@ -134,8 +135,8 @@ const bool registered = [] {
        "apt without the (1 - a) splat of the current state must be rejected"},
       {"render.apt.negative_control.no_rejected_splat.glossy", "glossy.json", AptFault::kNoRejectedSplat,
        "apt without the (1 - a) splat of the current state must be rejected (glossy scene)"},
-      {"render.apt.negative_control.bootstrap_first_candidate", "cornell-box.json", AptFault::kBootstrapFirstCandidate,
-       "apt normalised by b from the shortest candidate of each bootstrap draw (not the sum over its candidates) "
+      {"render.apt.negative_control.bootstrap_last_candidate", "cornell-box.json", AptFault::kBootstrapLastCandidate,
+       "apt normalised by b from the full-length candidate of each bootstrap draw (not the sum over its prefixes) "
        "must be rejected"},
   };
   for (const Entry& e : entries) {

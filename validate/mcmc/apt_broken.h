@@ -52,12 +52,9 @@ struct MisstatedAptFactor {
 // current state (AptSettings::splat_weight).
 inline double apt_splat_without_rejected(Which which, double w, double pi) { return which == Which::kCurrent ? 0.0 : w / pi; }
 
-// The apt integrator's bootstrap weight of a draw from its shortest positive candidate only, not
-// the sum S over its candidates (AptSettings::bootstrap_sum): b then misses the longer prefixes.
-inline double apt_bootstrap_first_candidate(const std::vector<double>& w) {
-  for (double v : w)
-    if (v > 0.0) return v;
-  return 0.0;
-}
+// The apt integrator's bootstrap weight of a draw from its full-length candidate only, not the sum
+// S over its candidates (AptSettings::bootstrap_sum): a path tracer that forgets that every prefix
+// is a candidate; b then misses the shorter paths.
+inline double apt_bootstrap_last_candidate(const std::vector<double>& w) { return w.empty() ? 0.0 : w.back(); }
 
 }  // namespace tb::mcmc
