@@ -211,20 +211,9 @@ int64_t run_apt(const World& world, const RenderSettings& st, const AptSettings&
     });
     // 3. Mutations, in segments whose splat buffers are merged in chain order.
     const auto tm = std::chrono::steady_clock::now();
-    for (bool more = true; more;) {
-      parallel_for(static_cast<size_t>(C), [&](size_t ci) {
-        Chain& c = chains[ci];
-        SplatBuffer& buf = buffers[ci];
-        buf.clear();
-        for (int64_t m = 0; m < segment && c.remaining > 0; ++m, --c.remaining)
-          mutate(c, buf, apt.splat_weight, film.width(), film.height());
-      });
-      more = false;
-      for (int64_t ci = 0; ci < C; ++ci) {
-        film.merge_splats(buffers[static_cast<size_t>(ci)]);
-        more = more || chains[static_cast<size_t>(ci)].remaining > 0;
-      }
-    }
+    run_chain_segments(chains, buffers, segment, film, [&](Chain& c, SplatBuffer& buf) {
+      mutate(c, buf, apt.splat_weight, film.width(), film.height());
+    });
     total.mutation_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - tm).count();
     for (const Chain& c : chains) {
       total.small.merge(c.stats.small);
