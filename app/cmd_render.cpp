@@ -65,6 +65,20 @@ RankPart unpack_part(const std::string& s) {
   return p;
 }
 
+// Rank 0 prints every failed rank's message (rank order) and the run fails; `parts` from the gather.
+int report_rank_failures(const std::vector<std::string>& parts, int size) {
+  int failed = 0;
+  for (size_t r = 0; r < parts.size(); ++r) {
+    const RankPart part = unpack_part(parts[r]);
+    if (!part.header.contains("error")) continue;
+    ++failed;
+    fmt::print(stderr, "tb render under mpirun: rank {} of {} failed: {}\n", r, size,
+               part.header.at("error").get<std::string>());
+  }
+  if (failed > 0) fmt::print(stderr, "tb render under mpirun: {} of {} ranks failed; no image written\n", failed, size);
+  return failed;
+}
+
 }  // namespace
 
 int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
@@ -120,7 +134,21 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     return 2;
   }
   const auto t_load = std::chrono::steady_clock::now();
-  std::unique_ptr<World> world = load_scene_file(a.scene, a.resolution);
+  // Under mpirun a rank that fails (a scene missing on its machine, an exception while rendering)
+  // still takes part in the one gather, with its message instead of passes: rank 0 names it and
+  // every rank returns, instead of the others waiting for it forever.
+  std::unique_ptr<World> world;
+  try {
+    world = load_scene_file(a.scene, a.resolution);
+  } catch (const std::exception& e) {
+    if (!distributed) throw;
+    const std::vector<std::string> parts = mpi::gather(pack_part({{"error", e.what()}}, {}));
+    // Only rank 0's exit status may be non-zero: mpirun ends the whole job at the first non-zero
+    // one, which could cut rank 0 off before it has named the failed ranks.
+    if (mw.rank != 0) return 0;
+    report_rank_failures(parts, mw.size);
+    return 1;
+  }
   const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count();
 
   RenderSettings st = fixed_work_settings(*world, a.spp, a.passes, a.seed);
@@ -173,19 +201,25 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
   // ramlt-*: the driver directly, for the partition option and the per-region maps.
   std::optional<path_space::RamltRegionMaps> ramlt_maps;
   int64_t passes = 0;
-  if (ramlt) {
-    path_space::RamltOptions ro;
-    if (a.integrator == "ramlt-multichain") ro.perturbation = path_space::RamltPerturbation::kMultiChain;
-    if (!a.partition.empty()) ro.partition = a.partition;
-    ro = path_space::apply_ramlt_params(ro, st.params);
-    const path_space::RamltStats rs = path_space::run_ramlt(*world, st, film, ro);
-    for (const auto& m : rs.mlt.mutations) report.mutations.push_back({m.name, m.proposed, m.accepted, m.errors});
-    report.mutations_total = rs.mlt.mutations_total;
-    report.mutations_per_second = rs.mlt.mutations_per_second();
-    ramlt_maps = rs.maps;
-    passes = rs.mlt.chains;
-  } else {
-    passes = integ->render(*world, st, film);
+  std::string rank_error;
+  try {
+    if (ramlt) {
+      path_space::RamltOptions ro;
+      if (a.integrator == "ramlt-multichain") ro.perturbation = path_space::RamltPerturbation::kMultiChain;
+      if (!a.partition.empty()) ro.partition = a.partition;
+      ro = path_space::apply_ramlt_params(ro, st.params);
+      const path_space::RamltStats rs = path_space::run_ramlt(*world, st, film, ro);
+      for (const auto& m : rs.mlt.mutations) report.mutations.push_back({m.name, m.proposed, m.accepted, m.errors});
+      report.mutations_total = rs.mlt.mutations_total;
+      report.mutations_per_second = rs.mlt.mutations_per_second();
+      ramlt_maps = rs.maps;
+      passes = rs.mlt.chains;
+    } else {
+      passes = integ->render(*world, st, film);
+    }
+  } catch (const std::exception& e) {
+    if (!distributed) throw;
+    rank_error = e.what();
   }
   WelchImage welch = film.welch();
   int64_t nonfinite = film.nonfinite().count();
@@ -193,10 +227,15 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
     nlohmann::json h = {{"passes", passes}, {"nonfinite", nonfinite}, {"mutations_total", report.mutations_total}};
     h["mutations"] = nlohmann::json::array();
     for (const auto& m : report.mutations) h["mutations"].push_back({m.name, m.proposed, m.accepted, m.errors});
+    if (!rank_error.empty()) {
+      h = {{"error", rank_error}};
+      my_passes.clear();
+    }
     const std::vector<std::string> parts = mpi::gather(pack_part(h, my_passes));
     // Rank 0's exit status is the run's (mpirun reports a non-zero one); the other ranks are done, so
     // nothing after this point can leave them waiting on rank 0.
     if (mw.rank != 0) return 0;
+    if (report_rank_failures(parts, mw.size) > 0) return 1;
     {
       const size_t px = welch.pixels();
       for (size_t r = 1; r < parts.size(); ++r) {
@@ -256,10 +295,10 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
                         {"nonfinite_samples", nonfinite},
                         {"mpi_ranks", mw.size},
                         {"pass_tiles", tiles_path},
-                        // MCMC: one chain's splats spread over the image; pf1: a kernel reuses its
+                        // MCMC: one chain's splats spread over the image; pf1, pfk: a kernel reuses its
                         // neighbours' directions. Pixels of a pass are dependent, and tb compare decides on
                         // the pass-tile test (docs/integrator.md).
-                        {"pixels_dependent_within_pass", !report.mutations.empty() || ramlt || a.integrator == "pf1"},
+                        {"pixels_dependent_within_pass", !report.mutations.empty() || ramlt || a.integrator == "pf1" || a.integrator == "pfk"},
                         {"interrupted", interrupted && interrupted->load()},
                         {"scene_description", world->description()}};
   if (!report.mutations.empty()) {
@@ -295,12 +334,12 @@ int cmd_render(const RenderArgs& a, const std::atomic<bool>* interrupted) {
       fmt::print("{} proposed moves with a stated forward density of 0 or non-finite Hastings terms (never accepted): "
                  "a mutation misstates its density\n", errors);
   }
-  if (a.integrator == "pf1") {
+  if (a.integrator == "pf1" || a.integrator == "pfk") {
     const Pf1Timing t = pf1_last_timing();
     if (t.passes > 0)
-      fmt::print("pf1: {:.3f} s per pass in the prefix pass, {:.3f} s per pass filtering (kernels, weights, suffixes); "
+      fmt::print("{}: {:.3f} s per pass in the prefix pass, {:.3f} s per pass filtering (kernels, weights, suffixes); "
                  "mean kernel {:.2f} prefixes\n",
-                 t.prefix_seconds / double(t.passes), t.filter_seconds / double(t.passes), t.mean_members);
+                 a.integrator, t.prefix_seconds / double(t.passes), t.filter_seconds / double(t.passes), t.mean_members);
   }
   if (film.nonfinite().count() > 0)
     fmt::print("{} (replay: tb render {} --integrator {} --seed {})\n", film.nonfinite().summary(), a.scene,

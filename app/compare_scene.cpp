@@ -179,7 +179,23 @@ int cmd_compare_scene(const CompareSceneArgs& a, const std::atomic<bool>* interr
     return 2;
   }
 
-  const std::unique_ptr<World> world = load_scene_file(a.scene, a.resolution);
+  // Under mpirun a rank that cannot load the scene (a file missing on its machine) still takes part
+  // in the one gather below, with its message and no files: rank 0 then renders that rank's items
+  // itself (or, when rank 0 is the one that failed, names it and the run fails), instead of every
+  // other rank waiting for it forever.
+  std::unique_ptr<World> world;
+  try {
+    world = load_scene_file(a.scene, a.resolution);
+  } catch (const std::exception& e) {
+    if (mpi::world().size == 1) throw;
+    const std::vector<uint8_t> packed = nlohmann::json::to_cbor(
+        nlohmann::json{{"files", nlohmann::json::array()}, {"done", 0}, {"lost", 0}, {"error", e.what()}});
+    mpi::gather(std::string(packed.begin(), packed.end()));
+    // Only rank 0's exit status may be non-zero: mpirun ends the whole job at the first non-zero one.
+    if (mpi::world().rank != 0) return 0;
+    fmt::print(stderr, "tb compare under mpirun: rank 0 of {} failed: {}\n", mpi::world().size, e.what());
+    return 1;
+  }
   const int W = world->camera().width(), H = world->camera().height();
   const int max_depth = world->integrator_defaults().value("max_depth", 10);
   const std::string stem = fs::path(a.scene).stem().string();
@@ -277,6 +293,13 @@ int cmd_compare_scene(const CompareSceneArgs& a, const std::atomic<bool>* interr
     int total_done = done, total_lost = lost;
     for (size_t r = 1; r < parts.size(); ++r) {
       const nlohmann::json part = nlohmann::json::from_cbor(parts[r]);
+      if (part.contains("error")) {
+        // Every item dealt to that rank (j = r mod size) is lost.
+        const size_t dealt = (items.size() + static_cast<size_t>(mw.size) - 1 - r) / static_cast<size_t>(mw.size);
+        fmt::print(stderr, "tb compare under mpirun: rank {} of {} failed ({}); rank 0 renders its {} items again\n", r,
+                   mw.size, part.at("error").get<std::string>(), dealt);
+        total_lost += static_cast<int>(dealt);
+      }
       total_done += part.at("done").get<int>();
       total_lost += part.at("lost").get<int>();
       for (const auto& f : part.at("files")) {

@@ -44,4 +44,20 @@ list(LENGTH hits2 n2)
 if(NOT n2 EQUAL 0)
   message(FATAL_ERROR "mpi_compare: negative control not caught: --seed 2 reloaded ${n2} renders")
 endif()
-message("mpi_compare: 7 renders over 2 ranks, all reloaded by a one-process --resume; --seed 2 reloads none")
+# A rank that cannot read the scene (MPMD: rank 1 is given a missing file) must not hang the run:
+# rank 0 names it, renders its items itself and the comparison completes.
+set(rest --integrators pt,bdpt --time 0.3 --checkpoints 3 --resolution 16x16 --threads 1 --no-progress -o "${WORK}/failed")
+execute_process(COMMAND "${MPIRUN}" --oversubscribe -n 1 "${TB}" compare "${SCENE}" ${rest}
+                        : -n 1 "${TB}" compare "${WORK}/missing.json" ${rest}
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 600)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "mpi_compare: rank 1 without its scene: exit '${rc}'\n${out}\n${err}")
+endif()
+if(NOT err MATCHES "rank 1 of 2 failed \\(cannot read" OR NOT out MATCHES "\\(4 done, 3 lost and rendered again on rank 0\\)")
+  message(FATAL_ERROR "mpi_compare: rank 1 without its scene: failure not reported, or its 3 renders not redone\n${out}\n${err}")
+endif()
+if(NOT EXISTS "${WORK}/failed/runs/bdpt-2.exr" OR NOT EXISTS "${WORK}/failed/results.json")
+  message(FATAL_ERROR "mpi_compare: rank 1 without its scene: the comparison did not complete")
+endif()
+message("mpi_compare: 7 renders over 2 ranks, all reloaded by a one-process --resume; --seed 2 reloads none; "
+        "a rank without its scene is named and its renders redone on rank 0")

@@ -1,7 +1,8 @@
 # `mpirun -n 3 tb render` against `tb render` in one process: for each integrator below the EXR
 # (mean, Welch variance and moment channels) is byte-identical, with 5 passes cut 1 + 2 + 2 over
 # the ranks. Negative control: a one-process run with --seed 2 must give a different file.
-# --time under mpirun must be refused (exit 2). Run by the CTest mpi_render:
+# --time under mpirun must be refused (exit 2); a rank that fails is reported by rank 0 and ends the
+# run. Run by the CTest mpi_render:
 #   cmake -DTB=<tb> -DMPIRUN=<mpiexec> -DSCENE=<scenes/cornell-box.json> -DWORK=<scratch> -P tests/mpi_render.cmake
 cmake_minimum_required(VERSION 3.20)
 foreach(v TB MPIRUN SCENE WORK)
@@ -51,4 +52,27 @@ execute_process(COMMAND "${MPIRUN}" --oversubscribe -n 2 "${TB}" render "${SCENE
 if(rc EQUAL 0)
   message(FATAL_ERROR "mpi_render: --time under mpirun was accepted")
 endif()
-message("mpi_render: identical to one process for every integrator; --seed 2 differs (negative control caught); --time refused")
+# A rank that fails (its scene file is missing: MPMD, rank 2 is given another path) must not leave
+# the others waiting: the run ends within the timeout, non-zero, rank 0 names the rank and the
+# cause, and no image is written. The same with rank 0 as the failing one.
+foreach(bad 2 0)
+  if(bad EQUAL 2)
+    set(cmd "${MPIRUN}" --oversubscribe -n 2 "${TB}" render "${SCENE}" --integrator pt ${common} --out "${WORK}/failed.exr"
+            : -n 1 "${TB}" render "${WORK}/missing.json" --integrator pt ${common} --out "${WORK}/failed.exr")
+  else()
+    set(cmd "${MPIRUN}" --oversubscribe -n 1 "${TB}" render "${WORK}/missing.json" --integrator pt ${common} --out "${WORK}/failed.exr"
+            : -n 2 "${TB}" render "${SCENE}" --integrator pt ${common} --out "${WORK}/failed.exr")
+  endif()
+  execute_process(COMMAND ${cmd} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 120)
+  if(rc EQUAL 0 OR NOT rc MATCHES "^[0-9]+$")
+    message(FATAL_ERROR "mpi_render: rank ${bad} without its scene: exit '${rc}' (expected a non-zero exit, not a hang)\n${out}\n${err}")
+  endif()
+  if(NOT err MATCHES "rank ${bad} of 3 failed: cannot read")
+    message(FATAL_ERROR "mpi_render: rank ${bad} without its scene: the failure is not reported by rank\n${out}\n${err}")
+  endif()
+  if(EXISTS "${WORK}/failed.exr")
+    message(FATAL_ERROR "mpi_render: rank ${bad} without its scene: an image was written")
+  endif()
+endforeach()
+message("mpi_render: identical to one process for every integrator; --seed 2 differs (negative control caught); --time refused; "
+        "a failed rank is named and ends the run")

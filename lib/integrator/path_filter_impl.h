@@ -4,8 +4,10 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <span>
 #include <vector>
 
 #include "lib/core/hash.h"
@@ -125,19 +127,21 @@ inline void pf1_trace_prefixes(const World& world, const RenderSettings& st, con
   out->grid.build(pos, radius);
 }
 
-// The kernel of the query in `slot`: member slots (the query first collected, then sorted by slot)
-// and the query's position among them.
-inline int pf1_kernel(const Pf1Pass& pass, uint32_t slot, const Pf1Params& prm, std::vector<uint32_t>* members) {
-  const Vec3 x = pass.prefixes[slot].hit.p;
+// The kernel around x over the points of `grid` (grid point k -> slot filterable[k], positions pos(slot)):
+// member slots within radius r, at most max_members of them (the nearest, ties by slot; `self`, when one
+// of the points, always kept: distance -1), sorted by slot. A function of the positions only.
+template <class Pos>
+void filter_kernel(const PointGrid& grid, std::span<const uint32_t> filterable, const Pos& pos, const Vec3& x,
+                   uint32_t self, const Pf1Params& prm, std::vector<uint32_t>* members) {
   struct Near {
     double d2;
     uint32_t slot;
   };
   std::vector<Near> found;
-  pass.grid.for_each_within(x, prm.radius, [&](uint32_t k) {
-    const uint32_t s = pass.filterable[k];
-    const Vec3 d = pass.prefixes[s].hit.p - x;
-    found.push_back({s == slot ? -1.0 : glm::dot(d, d), s});  // the query itself always first
+  grid.for_each_within(x, prm.radius, [&](uint32_t k) {
+    const uint32_t s = filterable[k];
+    const Vec3 d = pos(s) - x;
+    found.push_back({s == self ? -1.0 : glm::dot(d, d), s});
   });
   if (static_cast<int>(found.size()) > prm.max_members) {
     std::sort(found.begin(), found.end(),
@@ -147,6 +151,13 @@ inline int pf1_kernel(const Pf1Pass& pass, uint32_t slot, const Pf1Params& prm, 
   members->clear();
   for (const Near& n : found) members->push_back(n.slot);
   std::sort(members->begin(), members->end());
+}
+
+// The kernel of the query in `slot`: member slots (the query always kept, then sorted by slot) and the
+// query's position among them.
+inline int pf1_kernel(const Pf1Pass& pass, uint32_t slot, const Pf1Params& prm, std::vector<uint32_t>* members) {
+  filter_kernel(pass.grid, pass.filterable, [&](uint32_t s) { return pass.prefixes[s].hit.p; },
+                pass.prefixes[slot].hit.p, slot, prm, members);
   return static_cast<int>(std::lower_bound(members->begin(), members->end(), slot) - members->begin());
 }
 
@@ -174,16 +185,48 @@ struct Pf1Stats {
 };
 void pf1_store_timing(const Pf1Stats& s);  // path_filter.cpp
 
-template <class Weights>
-int64_t render_pf1_with(const World& world, const RenderSettings& st, Film& film) {
-  const Pf1Params prm = pf1_params(world, st);
-  const LightSampler lights(world);
+// Emission found by a filtered direction w leaving the vertex at `from` (hit: the surface the ray
+// reached, null when it missed): calls emit(le, pl) for the emitter there (or every infinite light on a
+// miss) with the radiance le towards `from` and pl = pmf * pdf_li, the solid-angle density with which
+// the light sample at `from` would have chosen w (its classical term, as pt's emission weight).
+template <class Emit>
+void for_each_filtered_emission(const World& world, const LightSampler& lights, const SurfacePoint& from,
+                                const Vec3& w, const SurfacePoint* hit, Emit&& emit) {
+  if (hit) {
+    const SurfaceInfo& s2 = world.surface(hit->shape_id);
+    if (!s2.emitter) return;
+    const Rgb le = s2.emitter->le(hit->n, -w);
+    if (is_black(le)) return;
+    emit(le, lights.pmf(s2.emitter) * s2.emitter->pdf_li(from.p, w, hit));
+    return;
+  }
+  for (const Light* env : world.infinite_lights()) {
+    const Rgb le = env->le(Vec3(0.0), w);
+    if (is_black(le)) continue;
+    emit(le, lights.pmf(env) * env->pdf_li(from.p, w, nullptr));
+  }
+}
+
+// pf1's continuation beyond x_2: a fresh path-tracer estimate of the light scattered at x_2 and beyond.
+struct Pf1Suffix {
+  const PathTracer<ExactTerms>& suffix;
+  void begin_pass(int64_t /*pass*/, int64_t /*spp_pass*/, const Pf1Pass& /*pass1*/) {}
+  // f = f_i(w_k) |cos| at x_1; w = member k's level-1 weight (column, own k); returns the contribution
+  // to the query's sum (before the camera weight).
+  Rgb scattered(uint32_t /*query_slot*/, const Ray& ray, const SurfacePoint* /*hit2*/, const Rgb& f,
+                std::span<const double> /*column*/, int /*k*/, int /*query*/, const FilteringWeight& w,
+                RngUniforms& rng, RayCounts& rc) const {
+    const Rgb L = suffix.li(ray, rng, rc, nullptr, true);
+    return f * L * (w.weight / w.own_pdf);  // = f L / D(w_k) for the exact weights
+  }
+};
+
+// The filtering renderer: level 1 (the first camera vertex) as pf1; `cont` continues every member's
+// output path beyond x_2 (pf1: Pf1Suffix; pfk: the further filtered vertices, path_filter_multi_impl.h).
+template <class Weights, class Continuation>
+int64_t render_path_filter_with(const World& world, const RenderSettings& st, Film& film, const Pf1Params& prm,
+                                const LightSampler& lights, Continuation& cont) {
   const PathTracer<ExactTerms> pt(world, st, lights);
-  // The suffix from x_2 on: one scattering event (at x_1) already used.
-  RenderSettings suffix_st = st;
-  suffix_st.max_depth = st.max_depth - 1;
-  suffix_st.rr_min_depth = std::max(0, st.rr_min_depth - 1);
-  const PathTracer<ExactTerms> suffix(world, suffix_st, lights);
   Pf1Pass pass_data;
   Pf1Stats stats;
   std::atomic<int64_t> queries{0}, members_total{0};
@@ -191,6 +234,7 @@ int64_t render_pf1_with(const World& world, const RenderSettings& st, Film& film
   const int64_t done = run_passes(st, film, [&](int64_t pass, int64_t spp_pass) {
     const auto t0 = clock::now();
     pf1_trace_prefixes(world, st, pt, lights, pass, spp_pass, prm.radius, &pass_data);
+    cont.begin_pass(pass, spp_pass, pass_data);
     const auto t1 = clock::now();
     const uint64_t pair_seed = hash_values(st.seed, hash_string("pf1"), static_cast<uint64_t>(pass));
     for_each_film_tile(film, 16, [&](FilmTile& tile) {
@@ -238,30 +282,17 @@ int64_t render_pf1_with(const World& world, const RenderSettings& st, Film& film
             // so its denominator adds the classical term pmf * pdf_li (as pt's emission weight does).
             SurfacePoint hit2;
             ++rc.extension;
-            if (world.geometry().intersect_point(ray, &hit2)) {
-              const SurfaceInfo& s2 = world.surface(hit2.shape_id);
-              if (s2.emitter) {
-                const Rgb le = s2.emitter->le(hit2.n, -pk.wi);
-                if (!is_black(le)) {
-                  const double pl = lights.pmf(s2.emitter) * s2.emitter->pdf_li(q.hit.p, pk.wi, &hit2);
-                  const FilteringWeight wd = Weights::weight(column, k, qpos, pl);
-                  sum += f * le * (wd.weight / wd.own_pdf);
-                }
-              }
-            } else {
-              for (const Light* env : world.infinite_lights()) {
-                const Rgb le = env->le(Vec3(0.0), pk.wi);
-                if (is_black(le)) continue;
-                const double pl = lights.pmf(env) * env->pdf_li(q.hit.p, pk.wi, nullptr);
-                const FilteringWeight wd = Weights::weight(column, k, qpos, pl);
-                sum += f * le * (wd.weight / wd.own_pdf);
-              }
-            }
-            // The rest of the suffix (light scattered at x_2 and beyond): only the members sample it.
+            const bool found = world.geometry().intersect_point(ray, &hit2);
+            for_each_filtered_emission(world, lights, q.hit, pk.wi, found ? &hit2 : nullptr,
+                                       [&](const Rgb& le, double pl) {
+                                         const FilteringWeight wd = Weights::weight(column, k, qpos, pl);
+                                         sum += f * le * (wd.weight / wd.own_pdf);
+                                       });
+            // The rest (light scattered at x_2 and beyond): only the members sample it. Its own stream
+            // per pair (query, member).
             Rng stream = Rng::for_sample(pair_seed, slot, members[k]);
             RngUniforms rng(stream);
-            const Rgb L = suffix.li(ray, rng, rc, nullptr, true);
-            sum += f * L * (w.weight / w.own_pdf);  // = f L / D(w_k) for the exact weights
+            sum += cont.scattered(slot, ray, found ? &hit2 : nullptr, f, column, k, qpos, w, rng, rc);
           }
           v += q.cam_weight * sum;
         }
@@ -280,6 +311,19 @@ int64_t render_pf1_with(const World& world, const RenderSettings& st, Film& film
   stats.members = members_total.load();
   pf1_store_timing(stats);
   return done;
+}
+
+template <class Weights>
+int64_t render_pf1_with(const World& world, const RenderSettings& st, Film& film) {
+  const Pf1Params prm = pf1_params(world, st);
+  const LightSampler lights(world);
+  // The suffix from x_2 on: one scattering event (at x_1) already used.
+  RenderSettings suffix_st = st;
+  suffix_st.max_depth = st.max_depth - 1;
+  suffix_st.rr_min_depth = std::max(0, st.rr_min_depth - 1);
+  const PathTracer<ExactTerms> suffix(world, suffix_st, lights);
+  Pf1Suffix cont{suffix};
+  return render_path_filter_with<Weights>(world, st, film, prm, lights, cont);
 }
 
 }  // namespace tb::detail

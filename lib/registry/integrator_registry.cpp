@@ -8,9 +8,11 @@
 #include "lib/integrator/light_tracer.h"
 #include "lib/integrator/path_tracer.h"
 #include "lib/integrator/path_filter.h"
+#include "lib/integrator/path_filter_multi.h"
 #include "lib/integrator/photon_map.h"
 #include "lib/mcmc/apt_integrator.h"
 #include "lib/mcmc/path_space/hslt_mutation.h"
+#include "lib/mcmc/path_space/manifold_perturbation.h"
 #include "lib/mcmc/path_space/mlt.h"
 #include "lib/mcmc/path_space/ramlt.h"
 #include "lib/mcmc/path_space/stratified_mlt.h"
@@ -57,11 +59,13 @@ std::vector<IntegratorParameter> photon_map_parameters(bool progressive) {
   return out;
 }
 
-std::vector<IntegratorParameter> pf1_parameters() {
+std::vector<IntegratorParameter> to_parameters(const std::vector<std::pair<std::string, std::string>>& list) {
   std::vector<IntegratorParameter> out;
-  for (const auto& [name, description] : pf1_parameter_list()) out.push_back({name, description});
+  for (const auto& [name, description] : list) out.push_back({name, description});
   return out;
 }
+std::vector<IntegratorParameter> pf1_parameters() { return to_parameters(pf1_parameter_list()); }
+std::vector<IntegratorParameter> pfk_parameters() { return to_parameters(pfk_parameter_list()); }
 
 }  // namespace
 
@@ -98,6 +102,7 @@ const std::vector<IntegratorInfo>& integrators() {
         {"lt", "light tracing: emitter paths connected to the camera and splatted (importance transport)",
          [](const World& w, const RenderSettings& s, Film& f) { return render_lt(w, s, f); }},
         {"hslt", "path-space MLT with the half-vector mutation (Kaplanyan et al. 2014) mixed with the bidirectional mutation (pinhole)", render_hslt, {{"gamma", "half-vector step scale of Sec. 6.1 (default 0.1)"}, {"stratify", "1: Sec. 6.2-6.3 step sizes (default), 0: BSDF steps only"}, {"jump", "1: subspace jump of Sec. 5.2 (default), 0: off"}}},
+        {"memlt", "path-space MLT with the manifold perturbation of manifold exploration (Jakob and Marschner 2012: lens perturbation, specular chain re-solved by the half-vector walk) mixed with the bidirectional mutation (pinhole)", render_memlt, {{"r2", "lens kernel outer radius in pixels (default 10% of the larger image side)"}}},
         {"mlt", "Veach's path-space MLT: bidirectional mutation, lens and caustic perturbations through specular chains (pinhole)",
          [](const World& w, const RenderSettings& s, Film& f) { return render_mlt(w, s, f); }},
         {"mlt-stratified", "Veach's path-space MLT with Zirr & Dachsbacher 2020's stratified target "
@@ -152,6 +157,8 @@ const std::vector<IntegratorInfo>& integrators() {
          [](const World& w, const RenderSettings& s, Film& f) { return render_sppm(w, s, f); }, photon_map_parameters(true)},
         {"pf1", "single-vertex path filtering as unbiased marginal MIS (West et al. 2022, Sec. 5, K = 1): directions of neighbouring prefixes reused at the first camera vertex",
          [](const World& w, const RenderSettings& s, Film& f) { return render_pf1(w, s, f); }, pf1_parameters()},
+        {"pfk", "multi-vertex path filtering as unbiased marginal MIS (West et al. 2022, Sec. 5, Eq. 14): directions of neighbouring prefixes reused at the first K camera vertices",
+         [](const World& w, const RenderSettings& s, Film& f) { return render_pfk(w, s, f); }, pfk_parameters()},
         {"pt", "path tracing with next-event estimation, MIS (power heuristic) and Russian roulette",
          [](const World& w, const RenderSettings& s, Film& f) { return render_pt(w, s, f); }},
     };

@@ -126,6 +126,7 @@ CheckResult chi2_result(const SamplerChi2Result& s, double alpha, bool negative)
   r.samples = s.samples;
   r.message = (negative ? std::string("negative control (must be rejected): ") : std::string()) + s.message();
   r.details = s.details();
+  if (!negative) state_chi2_power(r, s, alpha);
   return r;
 }
 
@@ -182,6 +183,7 @@ CheckResult run_direction_chi2(const CheckContext& ctx) {
   std::string msg;
   for (const auto& [name, s] : cases) {
     r.passed = r.passed && s.passed(alpha);
+    state_chi2_power(r, s, alpha);
     r.p_value = std::min(r.p_value, s.p_value());
     r.samples += s.samples;
     r.details[name] = s.details();
@@ -311,6 +313,7 @@ CheckResult run_sample_wi_chi2(const CheckContext& ctx, bool broken) {
   std::string msg;
   for (const auto& [name, s] : cases) {
     all_pass = all_pass && s.passed(alpha);
+    state_chi2_power(r, s, alpha);
     r.p_value = std::min(r.p_value, s.p_value());
     r.samples += s.samples;
     r.details[name] = s.details();

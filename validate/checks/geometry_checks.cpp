@@ -83,6 +83,7 @@ double uv_density(const ShapeInstance& s, const Vec2& uv) {
 CheckResult chi2_result(const SamplerChi2Result& c, double alpha, const std::string& what) {
   CheckResult r;
   r.passed = c.passed(alpha);
+  state_chi2_power(r, c, alpha);
   r.statistic_name = "chi2";
   r.statistic = c.gof.statistic;
   r.p_value = c.p_value();

@@ -267,22 +267,28 @@ std::shared_ptr<const RenderRun> scene_reference(const CheckContext& ctx, const 
 
 // `control_name`: a broken variant found by find_render_function under that name (e.g. "pf1~mmis_omits_query")
 // instead of a broken estimator term.
+// `params`: integrator parameters (pfk's vertices), part of the record's name and seed.
 CheckResult run_agreement(const CheckContext& ctx, const SceneCase& sc, const std::string& integrator,
-                          std::optional<EstimatorFault> fault = std::nullopt, const std::string& control_name = "") {
+                          std::optional<EstimatorFault> fault = std::nullopt, const std::string& control_name = "",
+                          const std::map<std::string, double>& params = {}) {
   const bool control = fault.has_value() || !control_name.empty();
   const ImageSize& sz = ctx.full ? sc.full : sc.quick;
   const auto world = load_scene_at_resolution(sc.file, sz.resolution, sz.resolution);
-  const std::string what = fmt::format("{} vs bdpt reference on {} ({}x{})", integrator, sc.key, sz.resolution,
-                                       sz.resolution);
+  std::string param_text;
+  for (const auto& [k, v] : params) param_text += fmt::format(" {}={}", k, v);
+  const std::string what = fmt::format("{}{} vs bdpt reference on {} ({}x{})", integrator, param_text, sc.key,
+                                       sz.resolution, sz.resolution);
   const auto ref = scene_reference(ctx, sc, *world);
   if (!ref->ok()) return render_error_record(*ref, what + " (reference)");
   // Path tracing finds the glossy and refractive caustics of glossy.json and caustic.json only by
   // BSDF sampling into a small light: unbiased (measured: glossy 12x12 at 16k spp, image sum pt
   // 16.683 +- 0.034 vs bdpt 16.680 +- 0.014) but so heavy-tailed at 128 spp that its typical
   // image is darker than its mean and the t-test rejects. It is cheap: 16x the samples.
-  // pf1 shares pt's next-event estimation and path tracing beyond its filtered vertex: the same 16x.
-  const int64_t factor = integrator == "pt" || integrator == "pf1" ? 16 : sample_factor(integrator);
+  // pf1 and pfk share pt's next-event estimation and path tracing beyond their filtered vertices: the same 16x.
+  const bool filtering = integrator == "pf1" || integrator == "pfk";
+  const int64_t factor = integrator == "pt" || filtering ? 16 : sample_factor(integrator);
   RenderSettings st = settings_for(ctx, sc.quick, sc.full, kSceneMaxDepth, what, factor);
+  st.params = params;
   const RenderRun run = render_with(!control_name.empty() ? control_name
                                     : control             ? broken_integrator_name(integrator, *fault)
                                                           : integrator,
@@ -293,7 +299,7 @@ CheckResult run_agreement(const CheckContext& ctx, const SceneCase& sc, const st
   std::vector<bool> mask;
   if (integrator == "lt") mask = shiny_first_hit_pixels(*world, kLtMinRoughness);
   // Path tracing: pixels that receive a caustic directly or see one through the glass.
-  if (integrator == "pt" || integrator == "pf1")
+  if (integrator == "pt" || filtering)
     mask = mask_union(caustic_receiver_pixels(*world), shiny_first_hit_pixels(*world));
   // bdpt: a caustic seen through the glass (eye - S - S - D - S - S - light) has no connectable
   // pair of vertices and is sampled by s = 0 alone, heavy-tailed in test and reference alike
@@ -318,11 +324,12 @@ CheckResult run_agreement(const CheckContext& ctx, const SceneCase& sc, const st
   r.details["reference"] = ref->summary();
   r.details["fault"] = fault ? fault_name(*fault) : control ? control_name : "none";
   r.details["excluded_pixels"] = excluded;
-  r.details["settings"] = {{"spp", st.spp}, {"passes", st.passes}, {"max_depth", st.max_depth}, {"seed", st.seed}};
+  r.details["settings"] = {{"spp", st.spp}, {"passes", st.passes}, {"max_depth", st.max_depth}, {"seed", st.seed},
+                           {"params", params}};
   if (excluded > 0)
     r.message += fmt::format(" [{} pixels excluded: {}]", excluded,
                              integrator == "lt"   ? "first hit delta or near-specular"
-                             : integrator == "pt" || integrator == "pf1"
+                             : integrator == "pt" || filtering
                                  ? "first hit is delta or sees a light through a delta surface"
                                                   : "first hit is delta");
   if (run.nonfinite() + ref->nonfinite() > 0) {
@@ -633,6 +640,25 @@ const bool registered = [] {
            .kind = CheckKind::kStatistical,
            .run = [](const CheckContext& c) {
              return run_agreement(c, scene_cases()[0], "pf1", std::nullopt, "pf1~mmis_omits_query");
+           }});
+  // pfk (multi-vertex path filtering, docs/mmis-paths.md) with K = 2 and 3 on the Cornell box and glossy.json.
+  for (const int sci : {0, 1})
+    for (const int k : {2, 3})
+      reg.add({.name = fmt::format("integrator.agreement.{}.pfk{}", scene_cases()[sci].key, k),
+               .description = fmt::format("pfk with vertices={} (multi-vertex path filtering, unbiased MMIS) agrees "
+                                          "with a longer bdpt reference on {} (tiled Welch t, Šidák; Stouffer; "
+                                          "sum z^2), alpha 0.01",
+                                          k, scene_cases()[sci].file),
+               .kind = CheckKind::kStatistical,
+               .run = [sci, k](const CheckContext& c) {
+                 return run_agreement(c, scene_cases()[sci], "pfk", std::nullopt, "", {{"vertices", k}});
+               }});
+  reg.add({.name = "integrator.agreement.control.pfk_mmis_omits_own",
+           .description = "negative control: pfk (vertices=2) whose product of sums omits x_2's own technique must be "
+                          "rejected against the bdpt reference on cornell-box.json, alpha 0.01",
+           .kind = CheckKind::kStatistical,
+           .run = [](const CheckContext& c) {
+             return run_agreement(c, scene_cases()[0], "pfk", std::nullopt, "pfk~mmis_omits_own", {{"vertices", 2}});
            }});
   reg.add({.name = "integrator.agreement.control.lt_shading_correction_inverted",
            .description = "negative control: lt with the reciprocal of the adjoint BSDF's shading-normal factor "

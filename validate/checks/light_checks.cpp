@@ -173,6 +173,7 @@ CheckResult chi2_configs(const CheckContext& ctx, const std::string& name,
     const SamplerChi2Result res = configs[i](n, hash_values(ctx.seed, hash_string(name), i));
     const bool ok = res.passed(alpha);
     r.passed = r.passed && ok;
+    state_chi2_power(r, res, alpha);
     r.samples += res.samples;
     nlohmann::json d = res.details();
     d["label"] = labels[i];

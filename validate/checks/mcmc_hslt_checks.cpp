@@ -56,8 +56,10 @@
 #include "lib/path/dirac.h"
 #include "validate/chi2/sampler_chi2.h"
 #include "validate/mcmc/hslt_broken.h"
+#include "validate/mcmc/hslt_counters_json.h"
 #include "validate/mcmc/pairwise_balance.h"
 #include "validate/mcmc/pairwise_record.h"
+#include "validate/mcmc/path_space/mlt_image_check.h"
 #include "validate/mcmc/path_space/reference_density.h"
 #include "validate/mcmc/path_space/scene_cache.h"
 #include "validate/registry.h"
@@ -72,21 +74,6 @@ constexpr int kMaxDepth = 4;
 constexpr int kRes = 16;
 
 const LoadedScene& scene(const std::string& file) { return cached_scene(file, kRes); }
-
-nlohmann::json counters_json(const HsltCounters& c) {
-  const HsltCountsSnapshot s = snapshot(c);
-  nlohmann::json status = nlohmann::json::object();
-  for (int i = 0; i < kHsltWalkStatusCount; ++i)
-    status[hslt_walk_status_name(static_cast<HsltWalkStatus>(i))] = s.status[static_cast<size_t>(i)];
-  return {{"proposals", s.proposals},
-          {"forward_walks", status},
-          {"iterations_per_converged_walk", s.iterations_per_converged()},
-          {"iterations_per_walk", s.iterations_per_walk()},
-          {"non_reversible", s.non_reversible},
-          {"non_reversible_fraction_of_converged", s.non_reversible_fraction()},
-          {"generated", s.generated},
-          {"jumps", {{"attempted", s.jump_attempted}, {"projected", s.jump_projected}, {"succeeded", s.jump_succeeded}}}};
-}
 
 // A BDPT path the mutation applies to (any path after 4096 tries: the pair then has no flux).
 std::function<MltPath(Uniforms&)> applicable_start(const LoadedScene& sc, const HsltMutation& m) {
@@ -514,21 +501,6 @@ CheckResult hslt_dirac_chi2(DiracFault fault, const CheckContext& cx, const std:
 // and channels, Stouffer, sum z^2), alpha 1e-5. broken: the half-vector mutation's T without the
 // change of measure.
 CheckResult hslt_image(bool broken, const CheckContext& cx, const std::string& name) {
-  constexpr int kImage = 8;
-  const std::unique_ptr<World> world = load_scene_at_resolution("glossy.json", kImage, kImage);
-  Film ref(kImage, kImage);
-  RenderSettings rs;
-  rs.spp = cx.size(2048, 8192);
-  rs.passes = 32;
-  rs.max_depth = 3;
-  rs.seed = hash_values(cx.seed, hash_string(name + ".bdpt"));
-  render_bdpt(*world, rs, ref);
-  Film film(kImage, kImage);
-  RenderSettings st;
-  st.passes = cx.size(48, 128);
-  st.spp = st.passes * cx.size(160, 160);
-  st.max_depth = 3;
-  st.seed = hash_values(cx.seed, hash_string(name));
   const auto counters = std::make_shared<HsltCounters>();
   MltOptions o;
   o.mutations = [counters, broken](const PathContext& ctx, const PathMutationSettings& s) {
@@ -539,25 +511,10 @@ CheckResult hslt_image(bool broken, const CheckContext& cx, const std::string& n
           [](const HsltWithoutMeasure& m, const MltPath& x) { return m.applicable(x); });
     return l;
   };
-  const MltStats s = run_mlt(*world, st, film, o);
-  const ChannelCompare c = compare_channels(film.welch(), ref.welch(), kAlpha);
-  const HsltCountsSnapshot hc = snapshot(*counters);
-  CheckResult res;
-  res.passed = broken ? c.rejects() : !c.rejects();
-  res.statistic_name = "p (Šidák over pixel channels)";
-  res.statistic = c.p_value();
-  res.p_value = c.p_value();
-  res.alpha = kAlpha;
-  res.samples = s.mutations_total;
-  double acc = 0.0;
-  for (const auto& m : s.mutations)
-    if (m.name == "hslt") acc = m.acceptance_rate();
-  res.message = fmt::format("{} chains x {} mutations, {} half-vector proposals (acceptance {:.3f}) against BDPT: {}",
-                            s.chains, s.mutations_total / std::max<int64_t>(1, s.chains), hc.proposals, acc, c.message());
-  if (broken) res.message = (res.passed ? "broken variant rejected as required: " : "BROKEN VARIANT NOT DETECTED: ") + res.message;
-  res.details = c.details();
+  CheckResult res = mlt_image_against_bdpt(cx, name, "glossy.json", 3, o, broken, kAlpha, "hslt", [&counters] {
+    return fmt::format("{} half-vector proposals", snapshot(*counters).proposals);
+  });
   res.details["walks"] = counters_json(*counters);
-  for (const auto& m : s.mutations) res.details["acceptance_" + m.name] = m.acceptance_rate();
   return res;
 }
 

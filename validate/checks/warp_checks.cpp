@@ -50,6 +50,7 @@ CheckResult run_configs(const CheckContext& ctx, const std::string& name, int64_
     const SamplerChi2Result r = configs[k].run(o);
     const bool ok = r.passed(res.alpha);
     res.passed = res.passed && ok;
+    state_chi2_power(res, r, res.alpha);
     res.samples += r.samples;
     if (r.p_value() <= min_p) {
       min_p = r.p_value();

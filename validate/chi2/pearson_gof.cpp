@@ -7,11 +7,23 @@
 #include <vector>
 
 #include <boost/math/distributions/chi_squared.hpp>
+#include <boost/math/distributions/non_central_chi_squared.hpp>
 #include <fmt/format.h>
 
 #include "lib/core/math.h"
 
 namespace tb {
+
+double pearson_detectable_noncentrality(int dof, double alpha, double power) {
+  if (dof < 1 || !(alpha > 0 && alpha < 1) || !(power > alpha && power < 1)) return kInfinity;
+  const double critical = boost::math::quantile(boost::math::complement(boost::math::chi_squared(dof), alpha));
+  return boost::math::non_central_chi_squared::find_non_centrality(dof, critical, 1.0 - power);
+}
+
+double pearson_min_detectable_density_error(int dof, double n, double alpha, double power) {
+  if (!(n > 0)) return kInfinity;
+  return std::sqrt(pearson_detectable_noncentrality(dof, alpha, power) / n);
+}
 
 PearsonResult pearson_chi2_gof(std::span<const double> observed, std::span<const double> expected,
                                const PearsonOptions& options, const std::function<std::string(size_t)>& cell_name) {

@@ -40,6 +40,17 @@ struct PearsonResult {
   bool rejects(double alpha) const { return p_value < alpha; }
 };
 
+// Power of Pearson's test (docs/statistics.md, "What a passing check rules out"). Against an
+// alternative whose cell probabilities are p'_i, the statistic is approximately non-central
+// chi-square with dof degrees of freedom and non-centrality lambda = n sum_i (p'_i - p_i)^2 / p_i.
+// Returns the lambda at which the test at level alpha rejects with probability `power` (Boost's
+// non_central_chi_squared::find_non_centrality); infinite for dof < 1.
+double pearson_detectable_noncentrality(int dof, double alpha, double power = 0.9);
+// The smallest epsilon such that a density off by a factor (1 + epsilon) on one half of its mass
+// and (1 - epsilon) on the other (halves made of whole cells) is rejected with probability
+// `power` from n samples: lambda = n epsilon^2, so epsilon = sqrt(lambda / n).
+double pearson_min_detectable_density_error(int dof, double n, double alpha, double power = 0.9);
+
 // observed and expected have the same length; expected counts are in the same units as the
 // observations (normalised to the number of samples). cell_name(i) names cell i in messages
 // (default: "cell i").

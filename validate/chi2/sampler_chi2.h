@@ -30,6 +30,7 @@
 #include "lib/core/math.h"
 #include "lib/core/rng.h"
 #include "lib/core/uniforms.h"
+#include "validate/check_result.h"
 #include "validate/chi2/pearson_gof.h"
 #include "validate/plot_spec.h"
 
@@ -118,7 +119,22 @@ struct SamplerChi2Result {
   PlotSpec observed_heatmap(const std::string& title) const;
   PlotSpec expected_heatmap(const std::string& title) const;
   PlotSpec residual_heatmap(const std::string& title) const;  // (O - E) / sqrt(E)
+  // The smallest relative density error (+-epsilon on two halves of the mass) this run rejects
+  // with 90% power at alpha (pearson_min_detectable_density_error over its pooled cells).
+  double min_detectable_density_error(double alpha, double power = 0.9) const {
+    return pearson_min_detectable_density_error(gof.dof, static_cast<double>(samples), alpha, power);
+  }
 };
+
+inline constexpr const char* kChi2EffectKind = "relative density error (+-e on two halves of the mass)";
+
+// States a chi-square run's power in a check record: the worst (largest) MDE over the runs a
+// check combines, each at the level it is tested at.
+inline void state_chi2_power(CheckResult& r, const SamplerChi2Result& s, double alpha) {
+  const double e = s.min_detectable_density_error(alpha);
+  r.min_detectable_effect = r.effect_kind.empty() ? e : std::max(r.min_detectable_effect, e);
+  r.effect_kind = kChi2EffectKind;
+}
 
 // --- Type-erased core, on the parameter rectangle of the domain ---------------------------
 

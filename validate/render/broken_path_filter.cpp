@@ -1,6 +1,7 @@
 #include "validate/render/broken_path_filter.h"
 
 #include "lib/integrator/path_filter_impl.h"
+#include "lib/integrator/path_filter_multi_impl.h"
 
 namespace tb {
 namespace {
@@ -11,7 +12,25 @@ struct OmitQueryWeights {
   }
 };
 
+struct OmitOwnWeights : PfkExactWeights {
+  static FilteringWeight path_weight(std::span<const PfkLevel> levels) { return pfk_weight_omitting_own(levels); }
+};
+
 }  // namespace
+
+FilteringWeight pfk_weight_omitting_own(std::span<const PfkLevel> levels) {
+  FilteringWeight w = pfk_mmis_weight(levels);
+  double den = 1.0;
+  for (size_t d = 0; d < levels.size(); ++d) {
+    double s = 0.0;
+    for (size_t t = 0; t < levels[d].column.size(); ++t)
+      if (d == 0 || static_cast<int>(t) != levels[d].self) s += levels[d].column[t];
+    den *= s;
+  }
+  w.denominator = den;
+  w.weight = den > 0 ? w.own_pdf / den : 0.0;
+  return w;
+}
 
 FilteringWeight pf1_weight_omitting_query(std::span<const double> column, int own, int query, double classical) {
   FilteringWeight w = pf1_mmis_weight(column, own, classical);
@@ -24,6 +43,10 @@ FilteringWeight pf1_weight_omitting_query(std::span<const double> column, int ow
 }
 
 RenderFunction broken_path_filter(const std::string& integrator, const std::string& fault) {
+  if (integrator == "pfk" && fault == kPfkOmitsOwn)
+    return [](const World& w, const RenderSettings& st, Film& film) {
+      return detail::render_pfk_with<OmitOwnWeights>(w, st, film);
+    };
   if (integrator != "pf1" || fault != kPf1OmitsQuery) return {};
   return [](const World& w, const RenderSettings& st, Film& film) {
     return detail::render_pf1_with<OmitQueryWeights>(w, st, film);

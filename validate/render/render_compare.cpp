@@ -232,9 +232,9 @@ nlohmann::json ChannelCompare::details() const {
 
 ImageCompareOptions agreement_compare_options(const std::string& integrator) {
   ImageCompareOptions o;
-  // pf1 correlates pixels only through kernels of radius r, far below a pixel's footprint at check sizes
-  // (docs/mmis-paths.md): treated as independent, as pt.
-  if (integrator == "pt" || integrator == "pf1") o.test = CompareTest::kTiled;
+  // pf1 and pfk correlate pixels only through kernels of radius r, far below a pixel's footprint at check
+  // sizes (docs/mmis-paths.md): treated as independent, as pt.
+  if (integrator == "pt" || integrator == "pf1" || integrator == "pfk") o.test = CompareTest::kTiled;
   return o;
 }
 

@@ -14,7 +14,13 @@
 //  * a Taylor test along a seeded random unit direction d: r(h) = |f(x + h d) - f(x) - h J d| for
 //    h = h0 2^-k; the least-squares slope of log r against log h must be 2 +- slope_tolerance
 //    (points where r is at the rounding floor are dropped; if fewer than 3 remain, f is locally
-//    linear along d and the slope is reported as NaN, not failed);
+//    linear along d and the slope is reported as NaN, not failed; `taylor_fit_points` > 0 fits only
+//    that many of the smallest remaining steps, the most asymptotic part of r(h)). A direction along
+//    which the quadratic term nearly vanishes shows the cubic one (slope towards 3) over the whole
+//    range; with `taylor_directions` > 1 further seeded directions are tried and the configuration
+//    passes when one of them gives 2 +- slope_tolerance. A wrong J still fails: its remainder has a
+//    linear term (J_true - J) d, which is non-zero for almost every d, so every direction's slope
+//    falls towards 1;
 //  * the 2-norm condition number of J (Eigen JacobiSVD), reported.
 #pragma once
 
@@ -35,10 +41,13 @@ struct FdOptions {
   double discontinuity_tolerance = 1e-4; // skip when |D_h - D_{h/2}| (relative, as err) exceeds this
   bool ridders = true;                   // cross-check with Ridders' extrapolation (Ceres)
   double ridders_tolerance = 1e-6;       // pass: Ridders relative error below this
+  double ridders_initial_step = 1e-2;    // Ridders' first step, times max(1, |x_i|) (the Ceres default)
   bool taylor = true;                    // run the Taylor test
   double slope_tolerance = 0.1;          // pass: |slope - 2| <= this
   double taylor_h0 = 1e-2;               // largest Taylor step (times max(1, |x|_inf))
   int taylor_steps = 8;                  // number of halvings
+  int taylor_fit_points = 0;             // > 0: fit only this many smallest steps above the floor
+  int taylor_directions = 1;             // directions tried (see the header comment)
   uint64_t seed = 1;                     // for the Taylor directions
 };
 
@@ -47,6 +56,7 @@ struct FdPointResult {
   double ridders_rel_error = 0.0;  // Ridders vs analytic (0 when disabled)
   double step_disagreement = 0.0;  // h vs h/2, same measure
   double taylor_slope = 0.0;       // NaN when f is linear along the direction
+  int taylor_directions_used = 0;  // directions drawn until one passed (or all of them)
   double condition_number = 0.0;   // sigma_max / sigma_min of J (inf when rank deficient)
   bool skipped = false;            // discontinuity suspected
   bool nonfinite = false;          // f or J produced NaN / Inf (counts as a failure)

@@ -495,6 +495,29 @@ PathMutationList make_hslt_mixture(const PathContext& ctx, const PathMutationSet
 
 }  // namespace tb::path_space
 
+namespace tb::path_space {
+
+void print_walk_statistics(const char* label, const char* mutation, const char* what, const HsltCounters& counters,
+                           const MltStats& stats) {
+  const HsltCountsSnapshot c = snapshot(counters);
+  double acc = 0.0, acc_generated = 0.0;
+  for (const auto& m : stats.mutations)
+    if (m.name == mutation) {
+      acc = m.acceptance_rate();
+      acc_generated = m.proposed > m.failed ? double(m.accepted) / double(m.proposed - m.failed) : 0.0;
+    }
+  // Kaplanyan 2014, Table 3 (per proposal of the mutation on a path it applies to).
+  fmt::print("{}: {} {} proposals ({} selected on paths it does not apply to); iterations "
+             "{:.2f} per converged walk / {:.2f} per walk; generation rate {:.1f}%; non-reversible {} = {:.3f}% of the "
+             "converged walks; acceptance {:.1f}% of the generated ({:.1f}% of the selected); {:.3g} mutations/s (all "
+             "mutations)\n",
+             label, c.proposals, what, c.not_applicable, c.iterations_per_converged(), c.iterations_per_walk(),
+             100.0 * c.generation_rate(), c.non_reversible, 100.0 * c.non_reversible_fraction(), 100.0 * acc_generated,
+             100.0 * acc, stats.mutations_per_second());
+}
+
+}  // namespace tb::path_space
+
 namespace tb {
 
 int64_t render_hslt(const World& world, const RenderSettings& settings, Film& film) {
@@ -514,21 +537,8 @@ int64_t render_hslt(const World& world, const RenderSettings& settings, Film& fi
   };
   const MltStats stats = run_mlt(world, settings, film, o);
   fill_report(stats, settings.report);
+  print_walk_statistics("hslt (Table 3)", "hslt", "half-vector", *counters, stats);
   const HsltCountsSnapshot c = snapshot(*counters);
-  double acc = 0.0, acc_generated = 0.0;
-  for (const auto& m : stats.mutations)
-    if (m.name == "hslt") {
-      acc = m.acceptance_rate();
-      acc_generated = m.proposed > m.failed ? double(m.accepted) / double(m.proposed - m.failed) : 0.0;
-    }
-  // Kaplanyan 2014, Table 3 (per half-vector proposal on a path it applies to).
-  fmt::print("hslt (Table 3): {} half-vector proposals ({} selected on paths it does not apply to); iterations "
-             "{:.2f} per converged walk / {:.2f} per walk; generation rate {:.1f}%; non-reversible {} = {:.3f}% of the "
-             "converged walks; acceptance {:.1f}% of the generated ({:.1f}% of the selected); {:.3g} mutations/s (all "
-             "mutations)\n",
-             c.proposals, c.not_applicable, c.iterations_per_converged(), c.iterations_per_walk(),
-             100.0 * c.generation_rate(), c.non_reversible, 100.0 * c.non_reversible_fraction(), 100.0 * acc_generated, 100.0 * acc,
-             stats.mutations_per_second());
   // Table 3 "Submanifold jump" (Sec. 5.2).
   fmt::print("hslt subspace jumps (Sec. 5.2, {}): {} attempted (proposals on paths without a specular vertex), {} first "
              "predictions projected to a valid path, {} succeeded (bidirectionally invalid, proposed as jumps) = {:.2f}% of the "

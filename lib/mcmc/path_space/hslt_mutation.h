@@ -272,6 +272,11 @@ PathMutationList make_hslt_mixture(const PathContext& ctx, const PathMutationSet
                                    double gamma = HsltMutation::kDefaultGamma, bool stratify = true,
                                    bool jump = HsltMutation::kDefaultJump);
 
+// Prints the Table 3 line of Kaplanyan 2014 (iterations per converged / per forward walk, generation
+// rate, non-reversible fraction, acceptance of the mutation named `mutation`, mutations per second).
+void print_walk_statistics(const char* label, const char* mutation, const char* what, const HsltCounters& counters,
+                           const MltStats& stats);
+
 }  // namespace tb::path_space
 
 namespace tb {

@@ -45,6 +45,10 @@ double LensPerturbation::kernel_density(const Vec2& d) const {
 
 std::optional<MltPath> LensPerturbation::perturb(const MltPath& x, const Vec2& offset) const {
   if (!applicable(x)) return std::nullopt;
+  return trace(x, offset);
+}
+
+std::optional<MltPath> LensPerturbation::trace(const MltPath& x, const Vec2& offset) const {
   const auto rx = path_raster(*ctx_, x);
   if (!rx) return std::nullopt;
   const Vec2 ry = *rx + offset;
@@ -52,6 +56,7 @@ std::optional<MltPath> LensPerturbation::perturb(const MltPath& x, const Vec2& o
   if (!cam.projection().inside(ry)) return std::nullopt;
   const CameraRay cr = cam.generate_ray(ry, Vec2(0.5));
   const int k = x.segments(), j = chain_end(x);
+  if (j < 0) return std::nullopt;
   const auto hit = ctx_->world->geometry().intersect(Ray{x.v[k].hit.p, cr.ray.d});
   if (!hit) return std::nullopt;
   MltPath y = x;

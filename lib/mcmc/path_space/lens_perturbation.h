@@ -50,6 +50,10 @@ class LensPerturbation {
   double kernel_density(const Vec2& d) const;
   // y from x with a given raster offset (nothing when off the image or the ray escapes).
   std::optional<MltPath> perturb(const MltPath& x, const Vec2& offset) const;
+  // The tracing part of perturb without the applicability test (x_{j-1} may be specular): y with
+  // y_j .. y_{k-1} traced through x's specular chain, the other vertices of x kept (the manifold
+  // perturbation, manifold_perturbation.h, reconnects y_j to x_{j-1} by a walk instead).
+  std::optional<MltPath> trace(const MltPath& x, const Vec2& offset) const;
   // |d raster / d mu(x_j .. x_{k-1})| = P pE(k-1) times the pseudo densities along the chain.
   double raster_jacobian(const MltPath& x) const;
   double r1() const { return r1_; }

@@ -7,6 +7,7 @@
 #include "lib/mcmc/path_space/caustic_perturbation.h"
 #include "lib/mcmc/path_space/hslt_mutation.h"
 #include "lib/mcmc/path_space/lens_perturbation.h"
+#include "lib/mcmc/path_space/manifold_perturbation.h"
 #include "lib/mcmc/path_space/multi_chain_perturbation.h"
 #include "lib/mcmc/path_space/ramlt_perturbations.h"
 
@@ -49,6 +50,11 @@ std::shared_ptr<const PathMutation> make_hslt(const PathContext& ctx, const Path
   return std::make_shared<const PathProposalMutation<HsltMutation>>("hslt", w, HsltMutation(ctx), hslt_applies);
 }
 
+std::shared_ptr<const PathMutation> make_manifold(const PathContext& ctx, const PathMutationSettings&, double w) {
+  return std::make_shared<const PathProposalMutation<ManifoldPerturbation>>("manifold", w, ManifoldPerturbation(ctx),
+                                                                             manifold_applies);
+}
+
 std::vector<PathMutationInfo>& table() {
   static std::vector<PathMutationInfo> t = {
       {"bidirectional", "delete a subpath, regenerate it from both ends (Veach 1997, Sec. 11.4.2)", 0.4, make_bidir},
@@ -63,6 +69,9 @@ std::vector<PathMutationInfo>& table() {
        "screen region (Otsu et al., Sec. 3, 5)", 0.5, make_ramlt_multi, false},
       {"hslt", "half-vector mutation: perturb every half vector, walk to the new constraints, reverse check "
        "(Kaplanyan et al. 2014, Sec. 5, 6.1)", 0.5, make_hslt, false},
+      {"manifold", "manifold perturbation: lens perturbation to the first non-specular vertex, the specular chain "
+       "behind it re-solved by the half-vector walk, reverse check (Jakob and Marschner 2012, Sec. 5)", 0.5,
+       make_manifold, false},
   };
   return t;
 }
