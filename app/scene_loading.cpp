@@ -41,8 +41,8 @@ RenderSettings fixed_work_settings(const World& world, int64_t spp, int64_t pass
 }
 
 // Samples per pixel per pass of a time-budgeted run (see scene_loading.h): 1, except for the
-// integrators on the primary-sample-space driver, whose every pass starts with a bootstrap of at
-// least 8192 samples (PssSettings::bootstrap_for): n = ceil(65536 / P), so that a pass's mutations
+// integrators on the primary-sample-space driver and apt, whose every pass starts with a bootstrap
+// of at least 8192 samples (PssSettings::bootstrap_for, AptSettings::bootstrap_for): n = ceil(65536 / P), so that a pass's mutations
 // are at least eight times its bootstrap (at 256 x 256 and above, one mutation per pixel per
 // pass; at 128 x 128, four); and
 // multi-stage MLT, whose every pass also builds its guide images from scratch: n = ceil(131072 / P)
@@ -50,7 +50,7 @@ RenderSettings fixed_work_settings(const World& world, int64_t spp, int64_t pass
 int64_t default_pass_spp(const std::string& integrator, int64_t pixels) {
   const auto at_least = [pixels](int64_t mutations) { return std::max<int64_t>(1, (mutations + pixels - 1) / pixels); };
   if (integrator.rfind("msmlt", 0) == 0) return at_least(131072);
-  for (const char* prefix : {"pssmlt", "mmlt"})
+  for (const char* prefix : {"pssmlt", "mmlt", "apt"})
     if (integrator.rfind(prefix, 0) == 0) return at_least(65536);
   return 1;
 }

@@ -1,7 +1,7 @@
 // The one Metropolis-Hastings step of the project (Metropolis et al. 1953; Hastings 1970; with
 // state-dependent selection, Otsu et al., Sec. 3.2): choose a component, propose, accept or reject,
 // splat expected values (Veach 1997, Sec. 11.5). Every MCMC renderer driver (pssmlt, pssmlt-pt,
-// pssmlt-pt-rescaled, mmlt, msmlt, msmlt-mmlt, mlt) and every checker that runs a chain
+// pssmlt-pt-rescaled, mmlt, msmlt, msmlt-mmlt, mlt, apt) and every checker that runs a chain
 // (flux, stationarity, rank; kernel_step.h's step() runs this function) go through chain_step, and
 // every acceptance probability of the project, the pairwise checker's included, is formed by
 // decide() below.

@@ -114,6 +114,13 @@ std::optional<Hit> next_vertex(const Scene& scene, const Ray& ray, const Vec3& o
 
 std::optional<ForwardPath> trace_forward(const World& world, const Vec2& pixel, const Eigen::VectorXd& U, int k,
                                          const std::vector<double>& lobe) {
+  auto path = trace_forward_prefix(world, pixel, U, k, lobe);
+  if (!path || static_cast<int>(path->vertices.size()) != k) return std::nullopt;
+  return path;
+}
+
+std::optional<ForwardPath> trace_forward_prefix(const World& world, const Vec2& pixel, const Eigen::VectorXd& U, int k,
+                                                const std::vector<double>& lobe) {
   const Camera& cam = world.camera();
   if (cam.name() != "pinhole") throw std::invalid_argument("path differentials: only the pinhole camera");
   if (U.size() != 2 * k || static_cast<int>(lobe.size()) < k - 1)
@@ -129,14 +136,14 @@ std::optional<ForwardPath> trace_forward(const World& world, const Vec2& pixel, 
   const Scene& scene = world.geometry();
   for (int j = 1; j <= k; ++j) {
     const std::optional<Hit> hit = next_vertex(scene, ray, j == 1 ? path.eye : path.vertices.back().p, j > 1);
-    if (!hit) return std::nullopt;
+    if (!hit) break;
     path.vertices.push_back(*hit);
     if (j == k) break;
     const SurfaceInfo& surf = world.surface(hit->shape_id);
-    if (!surf.bsdf) return std::nullopt;
+    if (!surf.bsdf) break;
     const SurfaceScatter scatter(path.vertices.back(), *surf.bsdf);
     const auto bs = scatter.sample(-ray.d, lobe[j - 1], Vec2(U[2 * j], U[2 * j + 1]), TransportMode::kRadiance);
-    if (!bs || is_black(bs->weight)) return std::nullopt;
+    if (!bs || is_black(bs->weight)) break;
     path.wi.push_back(bs->wi);
     path.flags.push_back(bs->flags);
     path.pdf.push_back(bs->pdf);

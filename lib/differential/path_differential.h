@@ -84,6 +84,12 @@ std::optional<Hit> next_vertex(const Scene& scene, const Ray& ray, const Vec3& o
 // nothing when the path cannot be extended to k vertices.
 std::optional<ForwardPath> trace_forward(const World& world, const Vec2& pixel, const Eigen::VectorXd& U, int k,
                                          const std::vector<double>& lobe);
+// The same trace, stopped at its first failure instead of discarded: the longest prefix of X(U) of
+// at most k vertices (possibly none; nothing only when the camera gives no primary ray). Its first
+// j vertices, for any j <= vertices.size(), are trace_forward(..., j, ...) of U's first 2j entries
+// bit for bit (the prefixes of one traced path, the candidates of Zirr & Dachsbacher 2020, Sec. 7.2).
+std::optional<ForwardPath> trace_forward_prefix(const World& world, const Vec2& pixel, const Eigen::VectorXd& U, int k,
+                                                const std::vector<double>& lobe);
 
 // A path of k vertices sampled for checks and benchmarks: a pixel and U (film and bounce
 // uniforms in [margin, 1 - margin]^2), lobes drawn with a uniform and then held fixed

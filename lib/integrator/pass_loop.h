@@ -9,7 +9,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <vector>
 
+#include "lib/core/parallel.h"
 #include "lib/core/rng.h"
 #include "lib/film/film.h"
 #include "lib/film/film_tile.h"
@@ -71,6 +73,28 @@ void for_each_camera_sample(const FilmTile& tile, int film_width, const RenderSe
         sample(x, y, index, rng);
       }
     }
+}
+
+// The mutation phase of a pass of chain-based MCMC (the PSS driver, apt): every chain runs its
+// `remaining` mutations in segments of `segment`, chains in parallel, each splatting into its own
+// buffer (mutate(chain, buffer) makes one mutation); after each segment the buffers are merged
+// into the film in chain order, so the film is bit-identical for any thread count.
+template <class Chain, class Mutate>
+void run_chain_segments(std::vector<Chain>& chains, std::vector<SplatBuffer>& buffers, int64_t segment, Film& film,
+                        Mutate&& mutate) {
+  for (bool more = true; more;) {
+    parallel_for(chains.size(), [&](size_t ci) {
+      Chain& c = chains[ci];
+      SplatBuffer& buf = buffers[ci];
+      buf.clear();
+      for (int64_t m = 0; m < segment && c.remaining > 0; ++m, --c.remaining) mutate(c, buf);
+    });
+    more = false;
+    for (size_t ci = 0; ci < chains.size(); ++ci) {
+      film.merge_splats(buffers[ci]);
+      more = more || chains[ci].remaining > 0;
+    }
+  }
 }
 
 }  // namespace tb

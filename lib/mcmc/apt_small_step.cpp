@@ -23,12 +23,16 @@ AptTarget::AptTarget(const World& world, int k)
       k_(k),
       width_(static_cast<double>(world.camera().width())),
       height_(static_cast<double>(world.camera().height())) {
-  if (k < 2) throw std::invalid_argument("AptTarget: k >= 2 vertices (x_k on an emitter)");
+  if (k < 1) throw std::invalid_argument("AptTarget: k >= 1 vertices (x_k on an emitter)");
 }
 
 Vec2 AptTarget::raster(const State& x) const { return Vec2(x[0] * width_, x[1] * height_); }
 
-std::optional<differential::ForwardPath> AptTarget::trace(const State& x) const {
+std::optional<differential::ForwardPath> AptTarget::trace(const State& x) const { return trace_impl(x, false); }
+
+std::optional<differential::ForwardPath> AptTarget::trace_prefix(const State& x) const { return trace_impl(x, true); }
+
+std::optional<differential::ForwardPath> AptTarget::trace_impl(const State& x, bool prefix) const {
   if (x.size() != dimension()) throw std::invalid_argument("AptTarget: state of 3k - 1 coordinates");
   Eigen::VectorXd U(2 * k_);
   std::vector<double> lobe(static_cast<size_t>(k_ - 1));
@@ -41,19 +45,27 @@ std::optional<differential::ForwardPath> AptTarget::trace(const State& x) const 
     U[2 * j + 1] = x[o + 1];
     lobe[static_cast<size_t>(j - 1)] = x[o + 2];
   }
-  return differential::trace_forward(*world_, Vec2(0.0), U, k_, lobe);
+  return prefix ? differential::trace_forward_prefix(*world_, Vec2(0.0), U, k_, lobe)
+                : differential::trace_forward(*world_, Vec2(0.0), U, k_, lobe);
 }
 
-double AptTarget::density(const State& x) const {
-  const auto path = trace(x);
-  if (!path) return 0.0;
-  const Hit& last = path->vertices.back();
-  const AreaLight* em = world_->surface(last.shape_id).emitter;
-  if (!em) return 0.0;
-  Rgb t = em->le(last.n, -path->wi.back());
-  for (const Rgb& w : path->weight) t = t * w;
+Rgb AptTarget::contribution(const World& world, const differential::ForwardPath& path, int k) {
+  if (k < 1 || static_cast<int>(path.vertices.size()) < k) return Rgb(0.0);
+  const Hit& last = path.vertices[static_cast<size_t>(k - 1)];
+  const AreaLight* em = world.surface(last.shape_id).emitter;
+  if (!em) return Rgb(0.0);
+  const Vec3 wi = k == 1 ? path.camera_dir : path.wi[static_cast<size_t>(k - 2)];  // towards x_k
+  Rgb t = em->le(last.n, -wi);
+  for (int j = 0; j + 1 < k; ++j) t = t * path.weight[static_cast<size_t>(j)];
   const double v = luminance(t);
-  return v > 0.0 && std::isfinite(v) ? v : 0.0;
+  return v > 0.0 && std::isfinite(v) ? t : Rgb(0.0);
+}
+
+double AptTarget::density(const State& x) const { return luminance(value(x)); }
+
+Rgb AptTarget::value(const State& x) const {
+  const auto path = trace(x);
+  return path ? contribution(*world_, *path, k_) : Rgb(0.0);
 }
 
 AptScales AptTarget::scales(const State& x) const {
@@ -62,7 +74,12 @@ AptScales AptTarget::scales(const State& x) const {
   s.footprint.assign(groups, 0.0);
   std::vector<bool> active(groups, false);
   const auto path = trace(x);
-  if (path) {
+  if (path && k_ == 1) {  // the film group alone: A_0 = 1 / R (Listing 1 with n = 1)
+    s.traced = true;
+    s.footprint[0] = 1.0;
+    active[0] = true;
+    s.kkt = kkt_amplifiers(s.footprint, active, 1.0 / std::sqrt(width_ * height_));
+  } else if (path) {
     s.traced = true;
     // Eq. 21's terms t_j = p_pixel(i_1) / (p(i_j) |di_j/di_1|) (0 for Dirac lobes, which stay
     // inactive, Listing 1 line 14); in camera-footprint units F_j = t_j / P (the camera's p(i_1)
@@ -91,7 +108,10 @@ double AptSmallStep::factor(const AptScales& s, size_t i, double d) {
 }
 
 std::optional<AptState> AptSmallStep::propose(const State& x, Uniforms& u) const {
-  const AptScales s = target_->scales(x);
+  return propose(x, target_->scales(x), u);
+}
+
+AptState AptSmallStep::propose(const State& x, const AptScales& s, Uniforms& u) const {
   State y(x.size());
   for (size_t i = 0; i < x.size(); ++i) {
     // Box-Muller: z = sqrt(-2 ln(1 - u1)) cos(2 pi u2) is N(0, 1) for independent uniforms.

@@ -1,6 +1,7 @@
 // The adaptive forward path sampling small step (APT) of Zirr & Dachsbacher 2020, Sec. 7.1
 // (Listing 1), derivative-free form (the footprints of Eq. 21, Sec. 6.5), at a FIXED path length
-// k (k vertices x_1..x_k after the pinhole eye, x_k on an emitter; no next-event estimation).
+// k (k vertices x_1..x_k after the pinhole eye, x_k on an emitter; no next-event estimation). k = 1
+// (the emitter seen directly) has the film group only.
 // docs/zirr2020.md, "Adaptive forward path sampling", has the checks.
 //
 // State (primary sample space, Lebesgue measure on [0,1)^n, n = 3k - 1): group 0 = u_0, the two film
@@ -47,6 +48,7 @@
 #include <vector>
 
 #include "estimators/mcmc/kkt_footprints.h"
+#include "lib/core/spectrum.h"
 #include "lib/core/uniforms.h"
 #include "lib/differential/path_differential.h"
 #include "lib/scene/world.h"
@@ -73,13 +75,21 @@ class AptTarget {
   // The group of coordinate i.
   static int group(size_t i) { return i < 2 ? 0 : static_cast<int>((i - 2) / 3) + 1; }
   std::optional<differential::ForwardPath> trace(const State& x) const;
-  double density(const State& x) const;
+  // The longest prefix of the path of x of at most k vertices (differential::trace_forward_prefix).
+  std::optional<differential::ForwardPath> trace_prefix(const State& x) const;
+  double density(const State& x) const;  // luminance(value(x))
+  // f's colour: L_e(x_k -> x_{k-1}) prod_j weight_j (0 unless its luminance is positive and finite).
+  Rgb value(const State& x) const;
+  // The same for the first k vertices of a traced path (of at least k vertices; 0 otherwise): the
+  // candidates of the apt large step (lib/mcmc/apt_integrator.h) are the prefixes of one path.
+  static Rgb contribution(const World& world, const differential::ForwardPath& path, int k);
   Vec2 raster(const State& x) const;
   // Listing 1 for the state's path; budget R = 1 / sqrt(P).
   AptScales scales(const State& x) const;
   const World& world() const { return *world_; }
 
  private:
+  std::optional<differential::ForwardPath> trace_impl(const State& x, bool prefix) const;
   const World* world_;
   int k_;
   double width_, height_;
@@ -93,6 +103,8 @@ class AptSmallStep {
   using State = AptState;
   explicit AptSmallStep(const AptTarget& target) : target_(&target) {}
   std::optional<State> propose(const State& x, Uniforms& u) const;
+  // The same with x's scales given (target().scales(x)), for a chain that caches them.
+  State propose(const State& x, const AptScales& sx, Uniforms& u) const;
   double density(const State& x, const State& y) const;
   // w_{sigma_{g(i)}}(y_i - x_i) with the given scales.
   static double factor(const AptScales& s, size_t i, double d);

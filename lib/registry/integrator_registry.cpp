@@ -10,6 +10,7 @@
 #include "lib/integrator/path_filter.h"
 #include "lib/integrator/path_filter_multi.h"
 #include "lib/integrator/photon_map.h"
+#include "lib/mcmc/apt_integrator.h"
 #include "lib/mcmc/path_space/hslt_mutation.h"
 #include "lib/mcmc/path_space/manifold_perturbation.h"
 #include "lib/mcmc/path_space/mlt.h"
@@ -90,6 +91,12 @@ const std::vector<IntegratorInfo>& integrators() {
     std::vector<IntegratorInfo> t = {
         {"albedo", "primary-hit albedo (emitted radiance on emitters, directional albedo by one BSDF sample)",
          render_albedo},
+        {"apt", "Zirr & Dachsbacher 2020's MCMC over path-tracer paths (pinhole, no NEE): the adaptive forward path "
+         "sampling small step (Sec. 7.1) and the path tracer as a multiple-try reversible-jump large step (Sec. 7.2)",
+         render_apt,
+         {{"large_step", "large-step probability (default 0.3)"},
+          {"chains", "chains per pass (default 64)"},
+          {"bootstrap", "bootstrap draws per pass (default: N / 8 clamped to [8192, 100000])"}}},
         {"bdpt", "bidirectional path tracing: all (s, t) connections, power-heuristic MIS over the shared path densities",
          [](const World& w, const RenderSettings& s, Film& f) { return render_bdpt(w, s, f); }},
         {"lt", "light tracing: emitter paths connected to the camera and splatted (importance transport)",

@@ -223,6 +223,9 @@ const bool registered = [] {
   add_suite("mcmc.hole.rw", hole_rw, all_sampling, "normal with a hole, Gaussian random walk");
   add_suite("mcmc.transdim.rj", transdim_rj, all_sampling,
             "models on R and R^2, birth/death with cubic dimension-matching map + within-model walk");
+  add_suite("mcmc.prefix.mtm", prefix_mtm, all_sampling,
+            "models on [0,1), [0,1)^2, [0,1)^3, multiple-try large step over the prefixes of one draw (Zirr 2020 "
+            "Sec. 7.2, Eq. 27-29)");
   Registry::global().add(Check{.name = "mcmc.transdim.rj.jacobian_fd",
                                .description = "Reversible-jump map: stated |det J| against central differences",
                                .kind = CheckKind::kDeterministic,
@@ -269,6 +272,9 @@ const bool registered = [] {
                "a birth/death move without its Jacobian");
   add_negative("rj_missing_jacobian", "flux", transdim_rj_no_jacobian, "a birth/death move without its Jacobian");
   add_negative("rj_missing_jacobian", "rank", transdim_rj_no_jacobian, "a birth/death move without its Jacobian");
+  // Negative control: the prefix multiple-try step accepted without its reverse candidates.
+  add_negative("mtm_without_reverse_candidates", "stationarity", prefix_mtm_without_reverse,
+               "the prefix multiple-try large step accepted with min{1, S(U_Y) / pi(x)} (no reverse candidates)");
   // Negative control 3: stated sigma 5% off the sampled one.
   add_negative("misstated_sigma", "stationarity", gm1d_misstated_sigma,
                "an independent proposal whose stated sigma is 5% larger than its sampled sigma");

@@ -2,6 +2,8 @@
 // validate/checks/mcmc_apt_checks.cpp. Wrappers only: nothing here is in lib/.
 #pragma once
 
+#include <vector>
+
 #include "estimators/mcmc/chain_step.h"
 #include "estimators/mcmc/concepts.h"
 #include "lib/mcmc/apt_small_step.h"
@@ -45,5 +47,14 @@ struct MisstatedAptFactor {
     return AptSmallStep::factor(w, i, d);
   }
 };
+
+// The apt integrator (lib/mcmc/apt_integrator.h) splatting without the (1 - a) splat of the
+// current state (AptSettings::splat_weight).
+inline double apt_splat_without_rejected(Which which, double w, double pi) { return which == Which::kCurrent ? 0.0 : w / pi; }
+
+// The apt integrator's bootstrap weight of a draw from its full-length candidate only, not the sum
+// S over its candidates (AptSettings::bootstrap_sum): a path tracer that forgets that every prefix
+// is a candidate; b then misses the shorter paths.
+inline double apt_bootstrap_last_candidate(const std::vector<double>& w) { return w.empty() ? 0.0 : w.back(); }
 
 }  // namespace tb::mcmc

@@ -3,11 +3,13 @@
 // removed or misstated, built from the same estimators/mcmc/ templates.
 #pragma once
 
+#include <optional>
 #include <utility>
 
 #include "analytic/mcmc/continuous_proposals.h"
 #include "estimators/mcmc/acceptance.h"
 #include "estimators/mcmc/concepts.h"
+#include "estimators/mcmc/prefix_multiple_try.h"
 
 namespace tb::mcmc {
 
@@ -40,5 +42,31 @@ template <size_t N>
 auto misstated_independent_gaussian(Point<N> mu, double sigma, double stated_factor = 1.05) {
   return StatedDensity(IndependentGaussian<N>(mu, sigma), IndependentGaussian<N>(mu, stated_factor * sigma));
 }
+
+// Broken multiple-try large step: the prefix move of prefix_multiple_try.h accepted without the
+// reverse candidates, min{1, S(U_Y) / pi(x)} (the source's own weight in place of the sum over
+// the candidates of U_X = (u, U_X^+)). Proposal and stated density are the real ones.
+template <PrefixFamily F>
+class WithoutReverseCandidates {
+ public:
+  using State = typename PrefixMultipleTry<F>::State;
+  using Move = typename PrefixMultipleTry<F>::Move;
+  explicit WithoutReverseCandidates(PrefixMultipleTry<F> k) : k_(std::move(k)) {}
+  const F& target() const { return k_.target(); }
+  double target_density(const State& x) const { return k_.target_density(x); }
+  std::optional<Move> sample_move(const State& x, Uniforms& u) const { return k_.sample_move(x, u); }
+  State destination(const Move& m) const { return k_.destination(m); }
+  Move reverse(const State& x, const Move& m) const { return k_.reverse(x, m); }
+  double move_density(const State& x, const Move& m) const { return k_.move_density(x, m); }
+  MoveTerms move_terms(const State& x, const Move& m) const {
+    MoveTerms t = k_.move_terms(x, m);
+    t.forward = k_.target_density(x);
+    return t;
+  }
+  double acceptance(const State& x, const Move& m) const { return decide(move_terms(x, m)).acceptance; }
+
+ private:
+  PrefixMultipleTry<F> k_;
+};
 
 }  // namespace tb::mcmc

@@ -7,6 +7,7 @@
 #include "analytic/mcmc/finite_target.h"
 #include "analytic/mcmc/gaussian_mixture_target.h"
 #include "analytic/mcmc/hole_target.h"
+#include "analytic/mcmc/prefix_target.h"
 #include "analytic/mcmc/trans_dimensional_target.h"
 #include "estimators/mcmc/metropolis_hastings.h"
 #include "estimators/mcmc/multiple_try.h"
@@ -71,5 +72,10 @@ inline auto transdim_rj_no_jacobian() {
   return MetropolisHastings(TransDimensionalTarget(), Mixture(ModelSelection{}, BirthDeath(WithoutJacobian(CubicSplitMap{})),
                                                               ModelwiseRandomWalk(0.9)));
 }
+
+// The multiple-try large step over the prefixes of one draw (Zirr & Dachsbacher 2020, Sec. 7.2),
+// and its broken variant without the reverse candidates.
+inline auto prefix_mtm() { return PrefixMultipleTry(PrefixTarget{}); }
+inline auto prefix_mtm_without_reverse() { return WithoutReverseCandidates(PrefixMultipleTry(PrefixTarget{})); }
 
 }  // namespace tb::mcmc::kernels

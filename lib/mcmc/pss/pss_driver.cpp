@@ -475,19 +475,7 @@ int64_t run_pss(const SampleFunction& f_in, const RenderSettings& st, const PssS
     }
     // 3. Mutations, in segments whose splat buffers are merged in chain order.
     const auto tm = std::chrono::steady_clock::now();
-    for (bool more = true; more;) {
-      parallel_for(static_cast<size_t>(C), [&](size_t ci) {
-        Chain& c = chains[ci];
-        SplatBuffer& buf = buffers[ci];
-        buf.clear();
-        for (int64_t m = 0; m < segment && c.remaining > 0; ++m, --c.remaining) mutate(c, buf);
-      });
-      more = false;
-      for (int64_t ci = 0; ci < C; ++ci) {
-        film.merge_splats(buffers[static_cast<size_t>(ci)]);
-        more = more || chains[static_cast<size_t>(ci)].remaining > 0;
-      }
-    }
+    run_chain_segments(chains, buffers, segment, film, [](Chain& c, SplatBuffer& buf) { mutate(c, buf); });
     total.mutation_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - tm).count();
     for (const Chain& c : chains) {
       for (size_t k = 0; k < c.counts.size() && k < mutations.size(); ++k) {
