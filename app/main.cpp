@@ -236,6 +236,15 @@ int cmd_reproduce(const ReproduceArgs& a) {
     fmt::print(stderr, "tb reproduce: no experiment named '{}' (see tb reproduce --list)\n", a.name);
     return 2;
   }
+  // An experiment runs its replicates in one process: under mpirun every rank would run all of
+  // them and write the same files at once. Refused, until replicates are dealt over ranks.
+  if (tb::mpi::world().size > 1) {
+    if (tb::mpi::world().rank == 0)
+      fmt::print(stderr, "tb reproduce: not spread over MPI ranks (each of the {} ranks would run the whole "
+                         "experiment and write the same files); run it without mpirun\n",
+                 tb::mpi::world().size);
+    return 2;
+  }
   const std::string out = a.out.empty() ? "reports/out/" + a.name : a.out;
   tb::ProgressLine line(!a.no_progress && isatty(STDERR_FILENO));
   line.start(a.name);

@@ -74,5 +74,11 @@ foreach(bad 2 0)
     message(FATAL_ERROR "mpi_render: rank ${bad} without its scene: an image was written")
   endif()
 endforeach()
+# tb reproduce is not spread over ranks: under mpirun it is refused (exit 2, nothing written).
+execute_process(COMMAND "${MPIRUN}" --oversubscribe -n 2 "${TB}" reproduce mmis-fig1 --quick --no-progress
+                        --out "${WORK}/reproduce" RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 120)
+if(rc EQUAL 0 OR NOT err MATCHES "tb reproduce: not spread over MPI ranks" OR EXISTS "${WORK}/reproduce/report.json")
+  message(FATAL_ERROR "mpi_render: tb reproduce under mpirun was not refused (exit '${rc}')\n${out}\n${err}")
+endif()
 message("mpi_render: identical to one process for every integrator; --seed 2 differs (negative control caught); --time refused; "
-        "a failed rank is named and ends the run")
+        "a failed rank is named and ends the run; tb reproduce refused")
