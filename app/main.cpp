@@ -92,8 +92,19 @@ int cmd_calibrate(const CheckArgs& a, const std::vector<const tb::Check*>& selec
 // three weakest.
 void print_power(const nlohmann::json& p) {
   const double target = p.value("target", 0.02);
-  fmt::print("Power (90%, first attempts, controls left out): {} checks state their minimum detectable effect, {} do not\n",
-             p.value("stated", 0), p.value("not_stated", 0));
+  std::string unstated;
+  int listed = 0;
+  for (const auto& n : p.value("not_stated_checks", nlohmann::json::array())) {
+    if (listed++ == 3) {
+      unstated += ", ...";
+      break;
+    }
+    unstated += (unstated.empty() ? "" : ", ") + n.get<std::string>();
+  }
+  fmt::print("Power (90%, first attempts, controls left out): {} checks state their minimum detectable effect, {} "
+             "statistical checks do not{}; {} deterministic (a tolerance, no effect size)\n",
+             p.value("stated", 0), p.value("not_stated", 0), unstated.empty() ? "" : " (" + unstated + ")",
+             p.value("deterministic", 0));
   for (const auto& [kind, k] : p["kinds"].items()) {
     std::string weakest;
     int shown = 0;

@@ -150,20 +150,29 @@ nlohmann::json power_summary(const nlohmann::json& check_records, double target)
     std::vector<std::pair<double, std::string>> mde;
   };
   std::map<std::string, Kind> kinds;
-  int64_t stated = 0, not_stated = 0;
+  int64_t stated = 0, not_stated = 0, deterministic = 0;
+  nlohmann::json unstated = nlohmann::json::array();
   for (const auto& rec : check_records) {
     const std::string name = rec.value("name", "");
     if (is_control_check(name) || !rec.contains("first")) continue;
     const auto& r = rec["first"];
     const auto v = r.value("min_detectable_effect", nlohmann::json());
     if (!v.is_number()) {
-      ++not_stated;
+      // A deterministic check (no p-value) holds to a tolerance; it has no effect size to state.
+      const auto pv = r.value("p_value", nlohmann::json());
+      if (!pv.is_number() || pv.get<double>() < 0.0) {
+        ++deterministic;
+      } else {
+        ++not_stated;
+        unstated.push_back(name);
+      }
       continue;
     }
     ++stated;
     kinds[r.value("effect_kind", "")].mde.emplace_back(v.get<double>(), name);
   }
-  nlohmann::json out = {{"stated", stated}, {"not_stated", not_stated}, {"target", target}};
+  nlohmann::json out = {{"stated", stated},        {"not_stated", not_stated},   {"deterministic", deterministic},
+                        {"not_stated_checks", unstated}, {"target", target}};
   nlohmann::json jk = nlohmann::json::object();
   for (auto& [kind, k] : kinds) {
     std::sort(k.mde.begin(), k.mde.end(), [](const auto& a, const auto& b) { return a.first > b.first; });

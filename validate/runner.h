@@ -77,7 +77,8 @@ nlohmann::json calibrate_checks(const std::vector<const Check*>& checks, const R
 // The power of a run's checks (docs/statistics.md, "What a passing check rules out"): how many
 // state their minimum detectable effect (CheckResult::min_detectable_effect, of the first
 // attempt), and, per effect kind, how many detect `target` (default 2%) at 90% power and which
-// do not, largest first: {"stated": n, "not_stated": n, "target": t, "kinds": {kind: {"checks": n,
+// do not, largest first: {"stated": n, "not_stated": n (statistical checks that state none, named in
+// "not_stated_checks"), "deterministic": n (no p-value, no effect size), "target": t, "kinds": {kind: {"checks": n,
 // "meet_target": n, "median": m, "above_target": [{"name", "mde", "samples_scale_for_target"}...]}}}
 // (the factor on the samples that would reach the target, (mde / target)^2). Negative controls are
 // left out (their job is to be rejected, not to bound a bias).

@@ -147,9 +147,19 @@ TEST(Runner, PowerSummaryCountsStatedEffectsAndNamesTheWeakest) {
   records.push_back(run_one(check_with("a.weaker", 0.06), opt));
   records.push_back(run_one(check_with("a.unstated", std::numeric_limits<double>::infinity()), opt));
   records.push_back(run_one(check_with("a.negative_control.x", 0.5), opt));
+  records.push_back(run_one(make_check("a.exact", CheckKind::kDeterministic,
+                                       [](const CheckContext&) {
+                                         CheckResult r;
+                                         r.passed = true;
+                                         return r;
+                                       }),
+                            opt));
   const nlohmann::json p = power_summary(records, 0.02);
   EXPECT_EQ(p["stated"], 3);
   EXPECT_EQ(p["not_stated"], 1);
+  EXPECT_EQ(p["deterministic"], 1);
+  ASSERT_EQ(p["not_stated_checks"].size(), 1u);
+  EXPECT_EQ(p["not_stated_checks"][0], "a.unstated");
   const auto& k = p["kinds"]["uniform relative bias of the image"];
   EXPECT_EQ(k["checks"], 3);
   EXPECT_EQ(k["meet_target"], 1);
