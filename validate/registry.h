@@ -49,6 +49,13 @@ class Registry {
   std::vector<Check> checks_;
 };
 
+// Registers a check whose run also receives its own name (for its seeds and messages).
+inline void add_named_check(const std::string& name, const std::string& desc, CheckKind kind,
+                            std::function<CheckResult(const CheckContext&, const std::string&)> f) {
+  Registry::global().add(
+      Check{.name = name, .description = desc, .kind = kind, .run = [=](const CheckContext& cx) { return f(cx, name); }});
+}
+
 struct CheckRegistrar {
   explicit CheckRegistrar(Check c) { Registry::global().add(std::move(c)); }
 };

@@ -168,11 +168,7 @@ CheckResult memlt_image(bool broken, const CheckContext& cx, const std::string& 
   return res;
 }
 
-void add(const std::string& name, const std::string& desc, CheckKind kind,
-         std::function<CheckResult(const CheckContext&, const std::string&)> f) {
-  Registry::global().add(
-      Check{.name = name, .description = desc, .kind = kind, .run = [=](const CheckContext& cx) { return f(cx, name); }});
-}
+constexpr auto add = add_named_check;
 
 const bool registered = [] {
   using Fault = ManifoldBrokenDensity::Fault;

@@ -762,11 +762,7 @@ CheckResult caustic_study(const CheckContext& cx) {
   return r;
 }
 
-void add(const std::string& name, const std::string& desc, CheckKind kind,
-         std::function<CheckResult(const CheckContext&, const std::string&)> f) {
-  Registry::global().add(
-      Check{.name = name, .description = desc, .kind = kind, .run = [=](const CheckContext& cx) { return f(cx, name); }});
-}
+constexpr auto add = add_named_check;
 
 const bool registered = [] {
   const std::string p = "mlt.path_space.";

@@ -584,11 +584,7 @@ CheckResult initial_lambda_check(RamltOptions o, const CheckContext& cx, const s
   return res;
 }
 
-void add(const std::string& name, const std::string& desc, CheckKind kind,
-         std::function<CheckResult(const CheckContext&, const std::string&)> f) {
-  Registry::global().add(
-      Check{.name = name, .description = desc, .kind = kind, .run = [=](const CheckContext& cx) { return f(cx, name); }});
-}
+constexpr auto add = add_named_check;
 
 const bool registered = [] {
   const std::string p = "mcmc.ramlt.";
