@@ -273,8 +273,9 @@ const bool registered = [] {
   add_negative("rj_missing_jacobian", "flux", transdim_rj_no_jacobian, "a birth/death move without its Jacobian");
   add_negative("rj_missing_jacobian", "rank", transdim_rj_no_jacobian, "a birth/death move without its Jacobian");
   // Negative control: the prefix multiple-try step accepted without its reverse candidates.
-  add_negative("mtm_without_reverse_candidates", "stationarity", prefix_mtm_without_reverse,
-               "the prefix multiple-try large step accepted with min{1, S(U_Y) / pi(x)} (no reverse candidates)");
+  for (const char* stat : {"stationarity", "flux", "rank"})
+    add_negative("mtm_without_reverse_candidates", stat, prefix_mtm_without_reverse,
+                 "the prefix multiple-try large step accepted with min{1, S(U_Y) / pi(x)} (no reverse candidates)");
   // Negative control 3: stated sigma 5% off the sampled one.
   add_negative("misstated_sigma", "stationarity", gm1d_misstated_sigma,
                "an independent proposal whose stated sigma is 5% larger than its sampled sigma");
